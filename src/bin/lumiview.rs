@@ -1,0 +1,2 @@
+//! The `lumiview` command-line tool.
+fn main() {}

@@ -1,0 +1,15 @@
+//! lumiview: near-field luminaire appearance for lighting tools.
+//!
+//! Modules (one-way dependencies, see `docs/architecture.md`):
+//! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
+//! - [`nearfield`]: near-field scans (pure CPU).
+//! - [`gpu`]: wgpu renderer.
+//! - [`interop`]: Vulkan external memory (the only ash / wgpu-hal code).
+//! - [`ffi`]: the C ABI (the only `extern "C"` code).
+#![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
+
+pub mod ffi;
+pub mod gpu;
+pub mod interop;
+pub mod nearfield;
+pub mod photometry;

@@ -1,0 +1,445 @@
+//! A photometric file read into lumiview's model: format facts, labels, the absolute
+//! [`PhotometricWeb`], the luminous opening, declared and integrated flux.
+
+use std::path::Path;
+
+use super::error::{parse_error, PhotometryError};
+use super::ies::{self, IesFile, IesVersion, TiltTable};
+use super::ldt::{self, LdtFile};
+use super::opening::{classify_ies, luminance, LuminousOpening, OpeningShape};
+use super::text::decode;
+use super::web::{NativeGrid, PhotometricType, PhotometricWeb, Symmetry, ANGLE_EPS};
+
+/// Metres per foot.
+pub const METRES_PER_FOOT: f64 = 0.3048;
+
+/// The file format a luminaire was read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum FileFormat {
+    /// IES LM-63, with its edition.
+    Ies(IesVersion),
+    /// EULUMDAT.
+    Eulumdat,
+}
+
+impl FileFormat {
+    /// Human-readable name, e.g. `IES LM-63-2002`.
+    pub fn name(&self) -> String {
+        match self {
+            FileFormat::Ies(v) => format!("IES {}", v.name()),
+            FileFormat::Eulumdat => "EULUMDAT".to_string(),
+        }
+    }
+}
+
+/// Choices made when loading.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LoadOptions {
+    /// Lamp tilt angle in degrees at which to apply an IES TILT table; `None` keeps the measured
+    /// orientation (no factor).
+    pub tilt_deg: Option<f64>,
+    /// EULUMDAT lamp set to use (0-based; sets are alternative equipment).
+    pub lamp_set: usize,
+    /// Grid step in degrees for resampling Type A and B files into the C × γ frame (0 = automatic:
+    /// the file's finest step, between 0.25° and 1°).
+    pub ab_step_deg: f64,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            tilt_deg: None,
+            lamp_set: 0,
+            ab_step_deg: 0.0,
+        }
+    }
+}
+
+/// The raw file behind a [`Photometry`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum RawFile {
+    /// An IES file.
+    Ies(Box<IesFile>),
+    /// An EULUMDAT file.
+    Ldt(Box<LdtFile>),
+}
+
+/// A luminaire's far-field photometry in absolute units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Photometry {
+    /// The file's name as given.
+    pub source: String,
+    /// Format and edition.
+    pub format: FileFormat,
+    /// Labels and keywords (key, value) in file order.
+    pub labels: Vec<(String, String)>,
+    /// The file's photometric type (converted to Type C in `web`).
+    pub photometric_type: PhotometricType,
+    /// The symmetry the file declares.
+    pub symmetry: Symmetry,
+    /// Native table size as stored: (horizontal angles / C planes, vertical angles).
+    pub native_size: (usize, usize),
+    /// Number of lamps as written (EULUMDAT: of the chosen set; negative means absolute).
+    pub lamp_count: f64,
+    /// Total rated lamp flux in lm, `None` for absolute photometry.
+    pub lamp_flux_lm: Option<f64>,
+    /// The factor applied to stored values to get cd (IES: multiplier × ballast factor ×
+    /// ballast-lamp factor; EULUMDAT: conversion factor × lamp flux / 1000).
+    pub candela_scale: f64,
+    /// The file's own multiplier field (IES candela multiplier, EULUMDAT conversion factor).
+    pub multiplier: f64,
+    /// Declared light output ratio (fraction), where the file states one.
+    pub declared_lor: Option<f64>,
+    /// Declared luminaire flux in lm (EULUMDAT: lamp flux × LORL), where derivable.
+    pub declared_luminaire_flux_lm: Option<f64>,
+    /// Input power in W, where given.
+    pub input_watts: Option<f64>,
+    /// The luminous opening in metres.
+    pub opening: LuminousOpening,
+    /// Luminaire housing size (length, width, height) in m, where the file gives it.
+    pub luminaire_size_m: Option<[f64; 3]>,
+    /// TILT table, when the file has one.
+    pub tilt: Option<TiltTable>,
+    /// Tilt angle applied (degrees), when one was asked for.
+    pub tilt_applied_deg: Option<f64>,
+    /// Absolute intensity in cd over the sphere.
+    pub web: PhotometricWeb,
+    /// Non-fatal findings.
+    pub warnings: Vec<String>,
+    /// The file as read.
+    pub raw: RawFile,
+}
+
+impl Photometry {
+    /// Luminous flux in lm integrated from the web.
+    pub fn flux_lm(&self) -> f64 {
+        self.web.flux()
+    }
+
+    /// Integrated flux divided by the rated lamp flux (the light output ratio the data imply).
+    pub fn integrated_lor(&self) -> Option<f64> {
+        self.lamp_flux_lm.filter(|f| *f > 0.0).map(|f| self.flux_lm() / f)
+    }
+
+    /// Luminous intensity in cd towards (C, γ) in degrees.
+    pub fn intensity(&self, c_deg: f64, gamma_deg: f64) -> f64 {
+        self.web.sample(c_deg, gamma_deg)
+    }
+
+    /// Luminance in cd/m² of the luminous opening seen from (C, γ) in degrees: I / A_proj.
+    /// `None` where the projected area is zero.
+    pub fn luminance(&self, c_deg: f64, gamma_deg: f64) -> Option<f64> {
+        luminance(self.intensity(c_deg, gamma_deg), self.opening.projected_area(c_deg, gamma_deg))
+    }
+}
+
+/// Reads a photometric file (IES or EULUMDAT, detected from the extension, else the contents).
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<Photometry, PhotometryError> {
+    let bytes = std::fs::read(path).map_err(|source| PhotometryError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let name = path.display().to_string();
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let load_tilt = move |tilt_name: &str| -> Result<String, PhotometryError> {
+        let p = dir.join(tilt_name);
+        std::fs::read(&p)
+            .map(|b| decode(&b))
+            .map_err(|source| PhotometryError::Io { path: p, source })
+    };
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let text = decode(&bytes);
+    let is_ldt = match ext.as_str() {
+        "ldt" => true,
+        "ies" => false,
+        _ => !looks_like_ies(&text),
+    };
+    if is_ldt {
+        from_ldt(ldt::parse(&text, &name)?, &name, opts)
+    } else {
+        from_ies(ies::parse(&text, &name, &load_tilt)?, &name, opts)
+    }
+}
+
+/// Reads photometric text already in memory; `name` is used in errors and decides the format by
+/// its extension (`.ies` / `.ldt`) or, failing that, by the contents. `TILT=<file>` references
+/// cannot be resolved from memory and are an error.
+pub fn load_from_text(text: &str, name: &str, opts: &LoadOptions) -> Result<Photometry, PhotometryError> {
+    let lower = name.to_ascii_lowercase();
+    let is_ldt = if lower.ends_with(".ldt") {
+        true
+    } else if lower.ends_with(".ies") {
+        false
+    } else {
+        !looks_like_ies(text)
+    };
+    if is_ldt {
+        from_ldt(ldt::parse(text, name)?, name, opts)
+    } else {
+        let no_files = |t: &str| -> Result<String, PhotometryError> {
+            Err(parse_error(name, None, "TILT", format!("TILT={t} names a file, which cannot be read for in-memory text")).into())
+        };
+        from_ies(ies::parse(text, name, &no_files)?, name, opts)
+    }
+}
+
+fn looks_like_ies(text: &str) -> bool {
+    let first = text.lines().next().unwrap_or("").trim_start().to_ascii_uppercase();
+    first.starts_with("IES") || text.lines().take(200).any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
+}
+
+fn ab_step(opts: &LoadOptions, h: &[f64], v: &[f64]) -> f64 {
+    if opts.ab_step_deg > 0.0 {
+        return opts.ab_step_deg;
+    }
+    let finest = h
+        .windows(2)
+        .chain(v.windows(2))
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    finest.clamp(0.25, 1.0)
+}
+
+/// Converts a parsed IES file into the model.
+pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry, PhotometryError> {
+    let scale = f.candela_scale();
+    let values: Vec<f64> = f.candela.iter().map(|v| v * scale).collect();
+    let grid = NativeGrid {
+        file: name,
+        h: &f.horizontal_deg,
+        v: &f.vertical_deg,
+        values: &values,
+    };
+    let ptype = match f.photometric_type {
+        1 => PhotometricType::C,
+        2 => PhotometricType::B,
+        _ => PhotometricType::A,
+    };
+    let (mut web, symmetry) = match ptype {
+        PhotometricType::C => PhotometricWeb::from_type_c(&grid)?,
+        t => PhotometricWeb::from_type_ab(&grid, t, ab_step(opts, &f.horizontal_deg, &f.vertical_deg))?,
+    };
+    let mut warnings = f.warnings.clone();
+    let tilt_applied_deg = apply_tilt(&mut web, f.tilt.as_ref(), opts, name)?;
+    let unit = if f.units == 1 { METRES_PER_FOOT } else { 1.0 };
+    let (opening, warn) = classify_ies(f.width * unit, f.length * unit, f.height * unit, f.version < IesVersion::Lm63_2002);
+    warnings.extend(warn);
+    let lamp_flux_lm = (!f.is_absolute()).then(|| f.lamp_count * f.lumens_per_lamp);
+    let labels = f
+        .labels
+        .iter()
+        .map(|l| (String::new(), l.clone()))
+        .chain(f.keywords.iter().cloned())
+        .collect();
+    Ok(Photometry {
+        source: name.to_string(),
+        format: FileFormat::Ies(f.version),
+        labels,
+        photometric_type: ptype,
+        symmetry,
+        native_size: (f.horizontal_deg.len(), f.vertical_deg.len()),
+        lamp_count: f.lamp_count,
+        lamp_flux_lm,
+        candela_scale: scale,
+        multiplier: f.multiplier,
+        declared_lor: None,
+        declared_luminaire_flux_lm: None,
+        input_watts: Some(f.input_watts),
+        opening,
+        luminaire_size_m: None,
+        tilt: f.tilt.clone(),
+        tilt_applied_deg,
+        web,
+        warnings,
+        raw: RawFile::Ies(Box::new(f)),
+    })
+}
+
+fn apply_tilt(
+    web: &mut PhotometricWeb,
+    tilt: Option<&TiltTable>,
+    opts: &LoadOptions,
+    name: &str,
+) -> Result<Option<f64>, PhotometryError> {
+    let Some(angle) = opts.tilt_deg else {
+        return Ok(None);
+    };
+    if !angle.is_finite() {
+        return Err(PhotometryError::InvalidArgument {
+            name: "tilt_deg",
+            message: format!("{angle} is not a finite angle (file {name})"),
+        });
+    }
+    if let Some(t) = tilt {
+        web.scale(t.factor_at(angle));
+    }
+    Ok(Some(angle))
+}
+
+/// Converts a parsed EULUMDAT file into the model.
+pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry, PhotometryError> {
+    let Some(set) = f.lamp_sets.get(opts.lamp_set) else {
+        return Err(PhotometryError::InvalidArgument {
+            name: "lamp_set",
+            message: format!("{name} has {} lamp set(s); set {} asked for", f.lamp_sets.len(), opts.lamp_set + 1),
+        });
+    };
+    let absolute = set.count < 0.0;
+    let scale = if absolute {
+        f.conversion_factor
+    } else {
+        f.conversion_factor * set.flux_lm / 1000.0
+    };
+    let stored = f.stored_planes();
+    let ng = f.ng;
+    for w in f.c_deg.windows(2) {
+        if w[1] <= w[0] {
+            return Err(parse_error(name, None, "C angles", format!("angles must increase, found {} then {}", w[0], w[1])).into());
+        }
+    }
+    if f.c_deg.first().is_some_and(|c| c.abs() > ANGLE_EPS) || f.c_deg.last().is_some_and(|c| *c >= 360.0 - ANGLE_EPS) {
+        return Err(parse_error(name, None, "C angles", "expected C angles from 0 up to below 360°").into());
+    }
+    // Every C plane of the full circle, taken from the stored plane its symmetry maps it to.
+    let source_angle = |c: f64| -> f64 {
+        match f.symmetry {
+            0 => c,
+            1 => f.c_deg[0],
+            2 => {
+                if c <= 180.0 + ANGLE_EPS {
+                    c
+                } else {
+                    360.0 - c
+                }
+            }
+            3 => {
+                if c > 90.0 + ANGLE_EPS && c < 270.0 - ANGLE_EPS {
+                    (180.0 - c).rem_euclid(360.0)
+                } else {
+                    c
+                }
+            }
+            _ => {
+                let r = c.rem_euclid(180.0);
+                let r = if r > 90.0 { 180.0 - r } else { r };
+                if c > 180.0 + ANGLE_EPS && c < 360.0 {
+                    // C in (180, 360): mirror of 360 − C, then reduce to 0…90.
+                    let m = 360.0 - c;
+                    if m > 90.0 {
+                        180.0 - m
+                    } else {
+                        m
+                    }
+                } else {
+                    r
+                }
+            }
+        }
+    };
+    let (planes_h, values): (Vec<f64>, Vec<f64>) = if f.symmetry == 1 {
+        (vec![0.0], f.intensities[..ng].iter().map(|v| v * scale).collect())
+    } else {
+        let mut vals = Vec::with_capacity(f.mc * ng);
+        for &c in &f.c_deg {
+            let src = source_angle(c);
+            let k = stored
+                .iter()
+                .position(|&i| (f.c_deg[i] - src).abs() < 1e-3)
+                .ok_or_else(|| {
+                    parse_error(
+                        name,
+                        None,
+                        "C angles",
+                        format!("plane C{c} maps to C{src} under symmetry {}, which the file does not store", f.symmetry),
+                    )
+                })?;
+            vals.extend(f.intensities[k * ng..(k + 1) * ng].iter().map(|v| v * scale));
+        }
+        (f.c_deg.clone(), vals)
+    };
+    let grid = NativeGrid {
+        file: name,
+        h: &planes_h,
+        v: &f.gamma_deg,
+        values: &values,
+    };
+    let (web, _) = if planes_h.len() > 1 && planes_h[planes_h.len() - 1] <= 180.0 + ANGLE_EPS {
+        return Err(parse_error(name, None, "C angles", "a full set of C planes must extend beyond C180").into());
+    } else {
+        PhotometricWeb::from_type_c(&grid)?
+    };
+    let symmetry = match f.symmetry {
+        0 => Symmetry::None,
+        1 => Symmetry::Rotational,
+        2 => Symmetry::C0C180,
+        3 => Symmetry::C90C270,
+        _ => Symmetry::Quadrant,
+    };
+    let mut warnings = f.warnings.clone();
+    let m = |mm: f64| mm / 1000.0;
+    let [la, ba] = f.luminous_area_mm;
+    let heights = f.luminous_heights_mm.map(m);
+    let has_sides = heights.iter().any(|h| *h > 0.0);
+    let opening = if la == 0.0 && ba == 0.0 {
+        if has_sides {
+            warnings.push("luminous area has side heights but no length or width: read as a point".into());
+        }
+        LuminousOpening::point()
+    } else if ba == 0.0 {
+        let mut o = LuminousOpening::new(
+            if has_sides { OpeningShape::DiscWithSides } else { OpeningShape::Ellipse },
+            m(la),
+            m(la),
+            heights.iter().copied().fold(0.0, f64::max),
+        );
+        o.side_heights_m = heights;
+        o
+    } else {
+        let mut o = LuminousOpening::new(
+            if has_sides { OpeningShape::RectangleWithSides } else { OpeningShape::Rectangle },
+            m(la),
+            m(ba),
+            heights.iter().copied().fold(0.0, f64::max),
+        );
+        o.side_heights_m = heights;
+        o
+    };
+    let [ll, lw, lh] = f.luminaire_mm;
+    let luminaire_size_m = (ll > 0.0).then(|| [m(ll), m(if lw > 0.0 { lw } else { ll }), m(lh)]);
+    let labels = vec![
+        ("company".to_string(), f.company.clone()),
+        ("luminaire name".to_string(), f.luminaire_name.clone()),
+        ("luminaire number".to_string(), f.luminaire_number.clone()),
+        ("report".to_string(), f.report.clone()),
+        ("file name".to_string(), f.file_name.clone()),
+        ("date/user".to_string(), f.date_user.clone()),
+        ("lamp type".to_string(), set.lamp_type.clone()),
+    ];
+    let lor = f.lor_percent / 100.0;
+    Ok(Photometry {
+        source: name.to_string(),
+        format: FileFormat::Eulumdat,
+        labels,
+        photometric_type: PhotometricType::C,
+        symmetry,
+        native_size: (stored.len(), ng),
+        lamp_count: set.count,
+        lamp_flux_lm: (!absolute).then_some(set.flux_lm),
+        candela_scale: scale,
+        multiplier: f.conversion_factor,
+        declared_lor: Some(lor),
+        declared_luminaire_flux_lm: Some(set.flux_lm * if absolute { 1.0 } else { lor }),
+        input_watts: Some(set.watts),
+        opening,
+        luminaire_size_m,
+        tilt: None,
+        tilt_applied_deg: None,
+        web,
+        warnings,
+        raw: RawFile::Ldt(Box::new(f)),
+    })
+}
