@@ -1,2 +1,0 @@
-//! The `lumiview` command-line tool.
-fn main() {}

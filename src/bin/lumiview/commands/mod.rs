@@ -1,0 +1,259 @@
+//! The subcommands. Each returns an error whose text names the file or argument at fault.
+
+mod lut;
+mod plot;
+mod solid;
+
+use std::path::Path;
+
+use lumiview::photometry::{self, LoadOptions, Photometry};
+use serde_json::json;
+
+pub use lut::{lut, LutArgs};
+pub use plot::{plot, PlotArgs};
+pub use solid::{solid, SolidArgs};
+
+use crate::LoadArgs;
+
+/// Result of a subcommand.
+pub type CliResult = Result<(), Box<dyn std::error::Error>>;
+
+/// Reads a photometric file with the command-line load options.
+pub fn load(file: &Path, args: &LoadArgs) -> Result<Photometry, Box<dyn std::error::Error>> {
+    if args.lamp_set == 0 {
+        return Err("--lamp-set counts from 1".into());
+    }
+    let opts = LoadOptions {
+        tilt_deg: args.tilt,
+        lamp_set: args.lamp_set - 1,
+        ..LoadOptions::default()
+    };
+    Ok(photometry::load(file, &opts)?)
+}
+
+/// Parses `FROM:TO:STEP` (degrees) into the list of angles.
+pub fn angle_range(text: &str, arg: &str) -> Result<Vec<f64>, String> {
+    let parts: Vec<&str> = text.split(':').collect();
+    let bad = || format!("--{arg} `{text}`: expected FROM:TO:STEP in degrees, e.g. 0:345:15");
+    if parts.len() != 3 {
+        return Err(bad());
+    }
+    let nums: Vec<f64> = parts
+        .iter()
+        .map(|p| p.trim().parse::<f64>().ok().filter(|v| v.is_finite()))
+        .collect::<Option<Vec<_>>>()
+        .ok_or_else(bad)?;
+    let (from, to, step) = (nums[0], nums[1], nums[2]);
+    if step <= 0.0 || to < from || (to - from) / step > 100_000.0 {
+        return Err(bad());
+    }
+    let n = ((to - from) / step + 1e-9).floor() as usize;
+    Ok((0..=n).map(|i| from + i as f64 * step).collect())
+}
+
+/// Parses `C,GAMMA` in degrees.
+fn direction_arg(text: &str) -> Result<(f64, f64), String> {
+    let bad = || format!("--at `{text}`: expected C,GAMMA in degrees, e.g. --at 0,45");
+    let (c, g) = text.split_once(',').ok_or_else(bad)?;
+    let c: f64 = c.trim().parse().map_err(|_| bad())?;
+    let g: f64 = g.trim().parse().map_err(|_| bad())?;
+    if !c.is_finite() || !g.is_finite() || !(0.0..=180.0).contains(&g) {
+        return Err(format!("--at `{text}`: GAMMA must be within 0…180° and both angles finite"));
+    }
+    Ok((c, g))
+}
+
+/// Rounds for display without losing meaningful digits.
+fn fmt_num(v: f64) -> String {
+    if v == 0.0 {
+        "0".into()
+    } else if v.abs() >= 1000.0 {
+        format!("{v:.1}")
+    } else if v.abs() >= 1.0 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.5}")
+    }
+}
+
+/// `lumiview info`.
+pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
+    let p = load(file, args)?;
+    let (max_cd, max_c, max_g) = p.web.max_intensity();
+    let flux = p.flux_lm();
+    let o = &p.opening;
+    if as_json {
+        let v = json!({
+            "file": p.source,
+            "format": p.format.name(),
+            "labels": p.labels.iter().map(|(k, v)| json!({"key": k, "value": v})).collect::<Vec<_>>(),
+            "photometric_type": format!("{:?}", p.photometric_type),
+            "symmetry": format!("{:?}", p.symmetry),
+            "grid": {
+                "native_horizontal": p.native_size.0,
+                "native_vertical": p.native_size.1,
+                "web_c": p.web.c_angles().len(),
+                "web_gamma": p.web.gamma_angles().len(),
+                "gamma_range_deg": [p.web.gamma_range().0, p.web.gamma_range().1],
+            },
+            "lamp_count": p.lamp_count,
+            "absolute_photometry": p.lamp_flux_lm.is_none(),
+            "lamp_flux_lm": p.lamp_flux_lm,
+            "multiplier": p.multiplier,
+            "candela_scale": p.candela_scale,
+            "input_watts": p.input_watts,
+            "max_intensity_cd": max_cd,
+            "max_intensity_at_deg": {"c": max_c, "gamma": max_g},
+            "integrated_flux_lm": flux,
+            "downward_flux_lm": p.web.flux_between(0.0, 90.0),
+            "integrated_lor": p.integrated_lor(),
+            "declared_lor": p.declared_lor,
+            "declared_luminaire_flux_lm": p.declared_luminaire_flux_lm,
+            "opening": {
+                "shape": format!("{:?}", o.shape),
+                "length_m": o.length_m,
+                "width_m": o.width_m,
+                "height_m": o.height_m,
+                "side_heights_m": o.side_heights_m,
+            },
+            "luminaire_size_m": p.luminaire_size_m,
+            "tilt": p.tilt.as_ref().map(|t| json!({
+                "geometry": t.lamp_to_luminaire_geometry,
+                "angles_deg": t.angles_deg,
+                "factors": t.factors,
+            })),
+            "tilt_applied_deg": p.tilt_applied_deg,
+            "warnings": p.warnings,
+        });
+        println!("{}", serde_json::to_string_pretty(&v)?);
+        return Ok(());
+    }
+    println!("file              {}", p.source);
+    println!("format            {}", p.format.name());
+    for (k, v) in &p.labels {
+        let v = v.replace('\n', " / ");
+        if v.is_empty() {
+            continue;
+        }
+        if k.is_empty() {
+            println!("label             {v}");
+        } else {
+            println!("  {k:<16}{v}");
+        }
+    }
+    println!("photometric type  {:?}", p.photometric_type);
+    println!("symmetry          {:?}", p.symmetry);
+    println!(
+        "grid              {} horizontal × {} vertical angles as stored; web {} C × {} γ (γ {}–{}°)",
+        p.native_size.0,
+        p.native_size.1,
+        p.web.c_angles().len(),
+        p.web.gamma_angles().len(),
+        p.web.gamma_range().0,
+        p.web.gamma_range().1
+    );
+    match p.lamp_flux_lm {
+        Some(f) => println!("lamps             {} lamp(s), {} lm rated in total", p.lamp_count, fmt_num(f)),
+        None => println!("lamps             {} lamp(s), absolute photometry", p.lamp_count),
+    }
+    println!("multiplier        {} (total factor to cd: {})", fmt_num(p.multiplier), fmt_num(p.candela_scale));
+    if let Some(t) = &p.tilt {
+        println!(
+            "tilt              {} angles ({:?}), applied at {}",
+            t.angles_deg.len(),
+            t.source,
+            p.tilt_applied_deg.map_or("the measured orientation".to_string(), |a| format!("{a}°"))
+        );
+    }
+    println!("max intensity     {} cd at C {}°, γ {}°", fmt_num(max_cd), fmt_num(max_c), fmt_num(max_g));
+    print!("integrated flux   {} lm", fmt_num(flux));
+    if let Some(lor) = p.integrated_lor() {
+        print!(" ({:.1} % of lamp flux)", lor * 100.0);
+    }
+    println!();
+    if let Some(f) = p.declared_luminaire_flux_lm {
+        println!(
+            "declared flux     {} lm (LOR {})",
+            fmt_num(f),
+            p.declared_lor.map_or("—".into(), |l| format!("{:.1} %", l * 100.0))
+        );
+    }
+    println!(
+        "opening           {:?} {} × {} × {} m (length × width × height)",
+        o.shape,
+        fmt_num(o.length_m),
+        fmt_num(o.width_m),
+        fmt_num(o.height_m)
+    );
+    if o.side_heights_m.iter().any(|h| *h > 0.0) {
+        let [a, b, c, d] = o.side_heights_m;
+        println!("side heights      C0 {a} m, C90 {b} m, C180 {c} m, C270 {d} m");
+    }
+    if let Some([l, w, h]) = p.luminaire_size_m {
+        println!("luminaire size    {l} × {w} × {h} m");
+    }
+    for w in &p.warnings {
+        println!("warning           {w}");
+    }
+    Ok(())
+}
+
+/// `lumiview sample`.
+pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> CliResult {
+    let dirs = at.iter().map(|a| direction_arg(a)).collect::<Result<Vec<_>, _>>()?;
+    let p = load(file, args)?;
+    let samples: Vec<(f64, f64, f64)> = dirs.iter().map(|&(c, g)| (c, g, p.intensity(c, g))).collect();
+    if as_json {
+        let v = json!({
+            "unit": "cd",
+            "samples": samples.iter().map(|(c, g, cd)| json!({"c": c, "gamma": g, "cd": cd})).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string(&v)?);
+    } else {
+        println!("{:>10} {:>10} {:>14}", "C (°)", "γ (°)", "I (cd)");
+        for (c, g, cd) in samples {
+            println!("{c:>10} {g:>10} {:>14}", fmt_num(cd));
+        }
+    }
+    Ok(())
+}
+
+/// `lumiview luminance`.
+pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadArgs) -> CliResult {
+    let cs = angle_range(c, "c")?;
+    let gs = angle_range(gamma, "gamma")?;
+    if gs.iter().any(|g| !(0.0..=180.0).contains(g)) {
+        return Err(format!("--gamma `{gamma}`: angles must lie within 0…180°").into());
+    }
+    let p = load(file, args)?;
+    if p.opening.is_point() {
+        return Err(format!(
+            "{}: the luminous opening is a point (no dimensions in the file), so luminance is undefined",
+            p.source
+        )
+        .into());
+    }
+    let table: Vec<Vec<Option<f64>>> = gs.iter().map(|&g| cs.iter().map(|&c| p.luminance(c, g)).collect()).collect();
+    if as_json {
+        let v = json!({"unit": "cd/m2", "c": cs, "gamma": gs, "table": table});
+        println!("{}", serde_json::to_string(&v)?);
+        return Ok(());
+    }
+    println!("luminance in cd/m² of {} ({:?} opening)", p.source, p.opening.shape);
+    print!("{:>7}", "γ \\ C");
+    for c in &cs {
+        print!("{c:>8}");
+    }
+    println!();
+    for (g, row) in gs.iter().zip(&table) {
+        print!("{g:>7}");
+        for v in row {
+            match v {
+                Some(v) => print!("{:>8}", format!("{v:.0}")),
+                None => print!("{:>8}", "—"),
+            }
+        }
+        println!();
+    }
+    Ok(())
+}
