@@ -300,7 +300,14 @@ pub fn parse(
     } else if tilt_text.is_empty() {
         return Err(parse_error(file, Some(tilt_idx + 1), "TILT", "expected NONE, INCLUDE or a file name after `TILT=`").into());
     } else {
-        let tilt_src = load_tilt(tilt_text)?;
+        let tilt_src = load_tilt(tilt_text).map_err(|e| {
+            parse_error(
+                file,
+                Some(tilt_idx + 1),
+                "TILT",
+                format!("the TILT file `{tilt_text}` named here cannot be read: {e}"),
+            )
+        })?;
         let tls = lines(&tilt_src);
         let tilt_file_label = format!("{file} (TILT file {tilt_text})");
         let mut tt = Tokens::new(&tilt_file_label, &tls, 1, true);
