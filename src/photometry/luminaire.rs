@@ -324,16 +324,10 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
                 }
             }
             _ => {
-                let r = c.rem_euclid(180.0);
-                let r = if r > 90.0 { 180.0 - r } else { r };
-                if c > 180.0 + ANGLE_EPS && c < 360.0 {
-                    // C in (180, 360): mirror of 360 − C, then reduce to 0…90.
-                    let m = 360.0 - c;
-                    if m > 90.0 {
-                        180.0 - m
-                    } else {
-                        m
-                    }
+                // Symmetric about both planes: fold into C0…C90.
+                let r = if c > 180.0 { 360.0 - c } else { c };
+                if r > 90.0 {
+                    180.0 - r
                 } else {
                     r
                 }
