@@ -390,7 +390,7 @@ fn tilt_include_with_shared_lines_and_a_chosen_tilt() {
     assert_eq!(t.angles_deg, vec![0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0]);
     assert_eq!(t.factors, vec![1.0, 0.98, 0.95, 0.9, 0.84, 0.8, 0.78]);
     assert_eq!(base.intensity(0.0, 0.0), 500.0, "measured orientation: no factor");
-    assert_eq!(base.keywords_contain("TILT=NONE"), true);
+    assert!(base.keywords_contain("TILT=NONE"));
     let at = |deg: f64| {
         open_with(
             "fixtures/tilt_include_shared.ies",

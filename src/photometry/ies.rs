@@ -340,9 +340,9 @@ pub fn parse(
     let type_line = tokens.line();
     let ptype = tokens.number("photometric type")?;
     let photometric_type = match ptype {
-        x if x == 1.0 => 1,
-        x if x == 2.0 => 2,
-        x if x == 3.0 => 3,
+        1.0 => 1,
+        2.0 => 2,
+        3.0 => 3,
         other => {
             return Err(parse_error(
                 file,
@@ -356,8 +356,8 @@ pub fn parse(
     let units_line = tokens.line();
     let units = tokens.number("units type")?;
     let units = match units {
-        x if x == 1.0 => 1,
-        x if x == 2.0 => 2,
+        1.0 => 1,
+        2.0 => 2,
         other => {
             return Err(parse_error(file, Some(units_line), "units type", format!("expected 1 (feet) or 2 (metres), found {other}")).into())
         }
@@ -388,7 +388,7 @@ pub fn parse(
     let vertical_deg = tokens.numbers(n_vert, "vertical angles")?;
     let horizontal_deg = tokens.numbers(n_horiz, "horizontal angles")?;
     let table_line = tokens.line();
-    let candela = tokens.numbers(n_vert * n_horiz, "candela values")?;
+    let candela = tokens.numbers(n_vert.saturating_mul(n_horiz), "candela values")?;
     if let Some(pos) = candela.iter().position(|v| *v < 0.0) {
         return Err(parse_error(
             file,
@@ -480,6 +480,19 @@ mod tests {
         let t = MINIMAL.replace("1 1000 2 3 1 1 2", "1 1000 2 3 1 4 2");
         let e = parse(&t, "p.ies", &no_tilt).unwrap_err().to_string();
         assert!(e.contains("unknown photometric type 4"), "{e}");
+    }
+
+    #[test]
+    fn huge_table_in_a_short_file_is_an_error_not_an_allocation() {
+        // 100000 × 100000 candela values declared (80 GB as f64), both angle lists present.
+        let angles = |n: usize| (0..n).map(|i| format!("{}", i as f64 * 1e-3)).collect::<Vec<_>>().join(" ");
+        let t = format!(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 100000 100000 1 2 0 0 0\n1 1 10\n{}\n{}\n0 0\n",
+            angles(100_000),
+            angles(100_000)
+        );
+        let e = parse(&t, "big.ies", &no_tilt).unwrap_err().to_string();
+        assert!(e.contains("candela values") && e.contains("truncated"), "{e}");
     }
 
     #[test]

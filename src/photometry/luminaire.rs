@@ -8,7 +8,7 @@ use super::ies::{self, IesFile, IesVersion, TiltTable};
 use super::ldt::{self, LdtFile};
 use super::opening::{classify_ies, luminance, LuminousOpening, OpeningShape};
 use super::text::decode;
-use super::web::{NativeGrid, PhotometricType, PhotometricWeb, Symmetry, ANGLE_EPS};
+use super::web::{NativeGrid, PhotometricType, PhotometricWeb, Symmetry, ANGLE_EPS, MAX_INTENSITY_CD};
 
 /// Metres per foot.
 pub const METRES_PER_FOOT: f64 = 0.3048;
@@ -228,7 +228,7 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     let unit = if f.units == 1 { METRES_PER_FOOT } else { 1.0 };
     let (opening, warn) = classify_ies(f.width * unit, f.length * unit, f.height * unit, f.version < IesVersion::Lm63_2002);
     warnings.extend(warn);
-    let lamp_flux_lm = (!f.is_absolute()).then(|| f.lamp_count * f.lumens_per_lamp);
+    let lamp_flux_lm = (!f.is_absolute()).then_some(f.lamp_count * f.lumens_per_lamp);
     let labels = f
         .labels
         .iter()
@@ -275,7 +275,20 @@ fn apply_tilt(
         });
     }
     if let Some(t) = tilt {
-        web.scale(t.factor_at(angle));
+        // The factors come from the file: one that would take the web past the intensity bound
+        // (or to infinity) is an error, as the same intensities written directly would be.
+        let k = t.factor_at(angle);
+        let peak = web.max_intensity().0;
+        if !(k.is_finite() && peak * k <= MAX_INTENSITY_CD) {
+            return Err(parse_error(
+                name,
+                None,
+                "TILT multiplying factors",
+                format!("factor {k:e} at a tilt of {angle}° takes the peak {peak} cd beyond {MAX_INTENSITY_CD:e} cd"),
+            )
+            .into());
+        }
+        web.scale(k);
     }
     Ok(Some(angle))
 }
@@ -436,4 +449,24 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         warnings,
         raw: RawFile::Ldt(Box::new(f)),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_tilt_factor_is_an_error_not_an_infinite_web() {
+        let t = "IESNA:LM-63-2002\nTILT=INCLUDE\n1 2 0 90 1 1e300\n1 1000 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n100 50\n";
+        assert!(load_from_text(t, "t.ies", &LoadOptions::default()).is_ok());
+        let opts = LoadOptions {
+            tilt_deg: Some(45.0),
+            ..LoadOptions::default()
+        };
+        let e = load_from_text(t, "t.ies", &opts).unwrap_err().to_string();
+        assert!(e.contains("TILT multiplying factors"), "{e}");
+        let sane = t.replace("1e300", "0.5");
+        let p = load_from_text(&sane, "t.ies", &opts).unwrap();
+        assert!((p.web.sample(0.0, 0.0) - 100.0 * 0.75).abs() < 1e-9);
+    }
 }

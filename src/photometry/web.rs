@@ -10,6 +10,11 @@ use super::error::{parse_error, ParseError};
 /// Tolerance for angle comparisons, degrees.
 pub(crate) const ANGLE_EPS: f64 = 1e-6;
 
+/// The largest intensity in cd a web accepts. No luminaire comes near it (a searchlight reaches
+/// about 1e9 cd); anything above is a wrong multiplier or a corrupt file, and the bound keeps flux
+/// integrals, luminances (≤ 1e27 cd/m² over the smallest area divided by) and f32 textures finite.
+pub const MAX_INTENSITY_CD: f64 = 1e15;
+
 /// The photometric coordinate system a file was measured in (IES field "photometric type").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum PhotometricType {
@@ -65,7 +70,7 @@ pub fn direction(c_deg: f64, gamma_deg: f64) -> [f64; 3] {
 /// Type C angles (degrees; C in 0…360, γ in 0…180) of a direction in the luminaire frame.
 pub fn angles_of(d: [f64; 3]) -> (f64, f64) {
     let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if !(len > 0.0) {
+    if len.is_nan() || len <= 0.0 {
         return (0.0, 0.0);
     }
     let gamma = (-d[2] / len).clamp(-1.0, 1.0).acos().to_degrees();
@@ -151,14 +156,16 @@ fn check_values(g: &NativeGrid<'_>) -> Result<(), ParseError> {
         ));
     }
     for (i, &x) in g.values.iter().enumerate() {
-        if !x.is_finite() || x < 0.0 {
+        if !(x.is_finite() && (0.0..=MAX_INTENSITY_CD).contains(&x)) {
             let (ih, iv) = (i / g.v.len(), i % g.v.len());
+            let shown = if x.abs() < 1e9 { format!("{x}") } else { format!("{x:e}") };
             return Err(parse_error(
                 g.file,
                 None,
                 "candela values",
                 format!(
-                    "intensity at horizontal {}°, vertical {}° is {x}: expected a finite value ≥ 0",
+                    "intensity at horizontal {}°, vertical {}° is {shown} cd: expected a finite value from 0 to \
+                     {MAX_INTENSITY_CD:e} cd (wrong multiplier?)",
                     g.h[ih], g.v[iv]
                 ),
             ));
@@ -230,7 +237,7 @@ impl PhotometricWeb {
             // C in [0, 90): mirror of 180 − C in (90, 180].
             for i in (0..n).rev() {
                 let c = 180.0 - g.h[i];
-                if c >= -ANGLE_EPS && c < 90.0 - ANGLE_EPS {
+                if (-ANGLE_EPS..90.0 - ANGLE_EPS).contains(&c) {
                     planes.push((c.max(0.0), i));
                 }
             }
@@ -486,10 +493,10 @@ impl PhotometricWeb {
                 }
                 // I linear in γ along each plane: I = Ia (b−γ)/h + Ib (γ−a)/h over [lo, hi].
                 let h = (b - a).to_radians();
-                let (ar, lo_r, hi_r) = (a.to_radians(), lo.to_radians(), hi.to_radians());
-                // ∫ (γ − a) sin γ dγ and ∫ sin γ dγ over [lo, hi].
-                let int_sin = lo_r.cos() - hi_r.cos();
-                let int_lin = (-(hi_r - ar) * hi_r.cos() + hi_r.sin()) - (-(lo_r - ar) * lo_r.cos() + lo_r.sin());
+                if h <= 0.0 {
+                    continue; // a gap too small for radians (subnormal): no solid angle
+                }
+                let (int_sin, int_lin) = cell_integrals(a, lo, hi);
                 let wb = int_lin / h;
                 let wa = int_sin - wb;
                 let i_a = 0.5 * (self.cd[ic * ng + ig] + self.cd[(ic + 1) * ng + ig]);
@@ -499,6 +506,29 @@ impl PhotometricWeb {
         }
         total
     }
+}
+
+/// ∫ sin γ dγ and ∫ (γ − a) sin γ dγ (γ in radians) over [lo, hi], given in degrees with
+/// a ≤ lo < hi ≤ 180, in a form without cancellation: with m = (lo + hi)/2 and d = (hi − lo)/2,
+/// ∫ sin γ = 2 sin m sin d and ∫ (γ − lo) sin γ = 2 cos m (sin d − d cos d) + 2 d sin m sin d.
+/// Differences are taken in degrees before converting, so a narrow cell keeps its width's digits.
+/// The textbook antiderivative differences lose every digit for cells narrower than ~1e-6°, which
+/// made the flux of a fine γ grid negative (or NaN for a subnormal step).
+fn cell_integrals(a_deg: f64, lo_deg: f64, hi_deg: f64) -> (f64, f64) {
+    let m = (0.5 * (lo_deg + hi_deg)).to_radians();
+    let d = (0.5 * (hi_deg - lo_deg)).to_radians();
+    let (sin_d, cos_d) = d.sin_cos();
+    let (sin_m, cos_m) = m.sin_cos();
+    // sin d − d cos d = d³/3 − d⁵/30 + d⁷/840 − d⁹/45360 + …, by its series where it cancels.
+    let d2 = d * d;
+    let s = if d < 0.05 {
+        d * d2 * (1.0 / 3.0 - d2 * (1.0 / 30.0 - d2 * (1.0 / 840.0 - d2 / 45360.0)))
+    } else {
+        sin_d - d * cos_d
+    };
+    let int_sin = 2.0 * sin_m * sin_d;
+    let from_lo = 2.0 * cos_m * s + 2.0 * d * sin_m * sin_d;
+    (int_sin, (lo_deg - a_deg).to_radians() * int_sin + from_lo)
 }
 
 /// Index `i` and fraction `t` with `a[i] ≤ x ≤ a[i+1]` (clamped at the ends).
@@ -574,6 +604,29 @@ mod tests {
         assert_eq!(w.sample(0.0, 90.0), 10.0);
         assert_eq!(w.sample(0.0, 90.5), 0.0);
         assert_eq!(w.sample(123.0, 180.0), 0.0);
+    }
+
+    #[test]
+    fn flux_of_a_fine_gamma_step_is_exact_and_never_negative() {
+        // All light in one cell 1e-9° wide at γ = 60°: the old antiderivative difference gave a
+        // flux of random sign here, and NaN for a subnormal step.
+        let v = [60.0, 60.0 + 1e-9];
+        let (w, _) = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[0.0, 1000.0])).unwrap();
+        let h = (v[1] - v[0]).to_radians(); // 1e-9° as stored next to 60
+        let exact = 2.0 * PI * 1000.0 * (h / 2.0) * 60f64.to_radians().sin();
+        assert!(w.flux() >= 0.0 && ((w.flux() - exact) / exact).abs() < 1e-6, "{} vs {exact}", w.flux());
+        let v = [0.0, 5e-324, 90.0];
+        let (w, _) = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[1.0, 1.0, 1.0])).unwrap();
+        assert!(w.flux().is_finite() && (w.flux() - 2.0 * PI).abs() < 1e-9, "{}", w.flux());
+    }
+
+    #[test]
+    fn absurd_intensity_is_an_error() {
+        let v = [0.0, 90.0];
+        let e = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[1.0, 1e300])).unwrap_err();
+        assert!(e.message.contains("wrong multiplier"), "{e}");
+        let (w, _) = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[1.0, MAX_INTENSITY_CD])).unwrap();
+        assert!(w.flux().is_finite());
     }
 
     #[test]
