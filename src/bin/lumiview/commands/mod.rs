@@ -18,6 +18,34 @@ use crate::LoadArgs;
 /// Result of a subcommand.
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
 
+/// Appends formatted text to a report string (formatting into a `String` cannot fail).
+macro_rules! out {
+    ($s:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = write!($s, $($arg)*);
+    }};
+}
+
+/// Appends a formatted line to a report string.
+macro_rules! outln {
+    ($s:expr) => {{
+        $s.push('\n');
+    }};
+    ($s:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($s, $($arg)*);
+    }};
+}
+
+/// Writes a report to stdout; a closed pipe (`| head`) is not an error, and nothing panics.
+pub fn print_report(text: &str) -> CliResult {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("cannot write to stdout: {e}").into()),
+        _ => Ok(()),
+    }
+}
+
 /// Reads a photometric file with the command-line load options.
 pub fn load(file: &Path, args: &LoadArgs) -> Result<Photometry, Box<dyn std::error::Error>> {
     if args.lamp_set == 0 {
@@ -58,7 +86,9 @@ fn direction_arg(text: &str) -> Result<(f64, f64), String> {
     let c: f64 = c.trim().parse().map_err(|_| bad())?;
     let g: f64 = g.trim().parse().map_err(|_| bad())?;
     if !c.is_finite() || !g.is_finite() || !(0.0..=180.0).contains(&g) {
-        return Err(format!("--at `{text}`: GAMMA must be within 0…180° and both angles finite"));
+        return Err(format!(
+            "--at `{text}`: GAMMA must be within 0…180° and both angles finite"
+        ));
     }
     Ok((c, g))
 }
@@ -78,6 +108,7 @@ fn fmt_num(v: f64) -> String {
 
 /// `lumiview info`.
 pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
+    let mut out = String::new();
     let p = load(file, args)?;
     let (max_cd, max_c, max_g) = p.web.max_intensity();
     let flux = p.flux_lm();
@@ -125,25 +156,26 @@ pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
             "tilt_applied_deg": p.tilt_applied_deg,
             "warnings": p.warnings,
         });
-        println!("{}", serde_json::to_string_pretty(&v)?);
-        return Ok(());
+        outln!(out, "{}", serde_json::to_string_pretty(&v)?);
+        return print_report(&out);
     }
-    println!("file              {}", p.source);
-    println!("format            {}", p.format.name());
+    outln!(out, "file              {}", p.source);
+    outln!(out, "format            {}", p.format.name());
     for (k, v) in &p.labels {
         let v = v.replace('\n', " / ");
         if v.is_empty() {
             continue;
         }
         if k.is_empty() {
-            println!("label             {v}");
+            outln!(out, "label             {v}");
         } else {
-            println!("  {k:<16}{v}");
+            outln!(out, "  {k:<16}{v}");
         }
     }
-    println!("photometric type  {:?}", p.photometric_type);
-    println!("symmetry          {:?}", p.symmetry);
-    println!(
+    outln!(out, "photometric type  {:?}", p.photometric_type);
+    outln!(out, "symmetry          {:?}", p.symmetry);
+    outln!(
+        out,
         "grid              {} horizontal × {} vertical angles as stored; web {} C × {} γ (γ {}–{}°)",
         p.native_size.0,
         p.native_size.1,
@@ -153,32 +185,52 @@ pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
         p.web.gamma_range().1
     );
     match p.lamp_flux_lm {
-        Some(f) => println!("lamps             {} lamp(s), {} lm rated in total", p.lamp_count, fmt_num(f)),
-        None => println!("lamps             {} lamp(s), absolute photometry", p.lamp_count),
+        Some(f) => outln!(
+            out,
+            "lamps             {} lamp(s), {} lm rated in total",
+            p.lamp_count,
+            fmt_num(f)
+        ),
+        None => outln!(out, "lamps             {} lamp(s), absolute photometry", p.lamp_count),
     }
-    println!("multiplier        {} (total factor to cd: {})", fmt_num(p.multiplier), fmt_num(p.candela_scale));
+    outln!(
+        out,
+        "multiplier        {} (total factor to cd: {})",
+        fmt_num(p.multiplier),
+        fmt_num(p.candela_scale)
+    );
     if let Some(t) = &p.tilt {
-        println!(
+        outln!(
+            out,
             "tilt              {} angles ({:?}), applied at {}",
             t.angles_deg.len(),
             t.source,
-            p.tilt_applied_deg.map_or("the measured orientation".to_string(), |a| format!("{a}°"))
+            p.tilt_applied_deg
+                .map_or("the measured orientation".to_string(), |a| format!("{a}°"))
         );
     }
-    println!("max intensity     {} cd at C {}°, γ {}°", fmt_num(max_cd), fmt_num(max_c), fmt_num(max_g));
-    print!("integrated flux   {} lm", fmt_num(flux));
+    outln!(
+        out,
+        "max intensity     {} cd at C {}°, γ {}°",
+        fmt_num(max_cd),
+        fmt_num(max_c),
+        fmt_num(max_g)
+    );
+    out!(out, "integrated flux   {} lm", fmt_num(flux));
     if let Some(lor) = p.integrated_lor() {
-        print!(" ({:.1} % of lamp flux)", lor * 100.0);
+        out!(out, " ({:.1} % of lamp flux)", lor * 100.0);
     }
-    println!();
+    outln!(out);
     if let Some(f) = p.declared_luminaire_flux_lm {
-        println!(
+        outln!(
+            out,
             "declared flux     {} lm (LOR {})",
             fmt_num(f),
             p.declared_lor.map_or("—".into(), |l| format!("{:.1} %", l * 100.0))
         );
     }
-    println!(
+    outln!(
+        out,
         "opening           {:?} {} × {} × {} m (length × width × height)",
         o.shape,
         fmt_num(o.length_m),
@@ -187,19 +239,20 @@ pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
     );
     if o.side_heights_m.iter().any(|h| *h > 0.0) {
         let [a, b, c, d] = o.side_heights_m;
-        println!("side heights      C0 {a} m, C90 {b} m, C180 {c} m, C270 {d} m");
+        outln!(out, "side heights      C0 {a} m, C90 {b} m, C180 {c} m, C270 {d} m");
     }
     if let Some([l, w, h]) = p.luminaire_size_m {
-        println!("luminaire size    {l} × {w} × {h} m");
+        outln!(out, "luminaire size    {l} × {w} × {h} m");
     }
     for w in &p.warnings {
-        println!("warning           {w}");
+        outln!(out, "warning           {w}");
     }
-    Ok(())
+    print_report(&out)
 }
 
 /// `lumiview sample`.
 pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> CliResult {
+    let mut out = String::new();
     let dirs = at.iter().map(|a| direction_arg(a)).collect::<Result<Vec<_>, _>>()?;
     let p = load(file, args)?;
     let samples: Vec<(f64, f64, f64)> = dirs.iter().map(|&(c, g)| (c, g, p.intensity(c, g))).collect();
@@ -208,18 +261,19 @@ pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> Cli
             "unit": "cd",
             "samples": samples.iter().map(|(c, g, cd)| json!({"c": c, "gamma": g, "cd": cd})).collect::<Vec<_>>(),
         });
-        println!("{}", serde_json::to_string(&v)?);
+        outln!(out, "{}", serde_json::to_string(&v)?);
     } else {
-        println!("{:>10} {:>10} {:>14}", "C (°)", "γ (°)", "I (cd)");
+        outln!(out, "{:>10} {:>10} {:>14}", "C (°)", "γ (°)", "I (cd)");
         for (c, g, cd) in samples {
-            println!("{c:>10} {g:>10} {:>14}", fmt_num(cd));
+            outln!(out, "{c:>10} {g:>10} {:>14}", fmt_num(cd));
         }
     }
-    Ok(())
+    print_report(&out)
 }
 
 /// `lumiview luminance`.
 pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadArgs) -> CliResult {
+    let mut out = String::new();
     let cs = angle_range(c, "c")?;
     let gs = angle_range(gamma, "gamma")?;
     if gs.iter().any(|g| !(0.0..=180.0).contains(g)) {
@@ -233,27 +287,35 @@ pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadAr
         )
         .into());
     }
-    let table: Vec<Vec<Option<f64>>> = gs.iter().map(|&g| cs.iter().map(|&c| p.luminance(c, g)).collect()).collect();
+    let table: Vec<Vec<Option<f64>>> = gs
+        .iter()
+        .map(|&g| cs.iter().map(|&c| p.luminance(c, g)).collect())
+        .collect();
     if as_json {
         let v = json!({"unit": "cd/m2", "c": cs, "gamma": gs, "table": table});
-        println!("{}", serde_json::to_string(&v)?);
-        return Ok(());
+        outln!(out, "{}", serde_json::to_string(&v)?);
+        return print_report(&out);
     }
-    println!("luminance in cd/m² of {} ({:?} opening)", p.source, p.opening.shape);
-    print!("{:>7}", "γ \\ C");
+    outln!(
+        out,
+        "luminance in cd/m² of {} ({:?} opening)",
+        p.source,
+        p.opening.shape
+    );
+    out!(out, "{:>7}", "γ \\ C");
     for c in &cs {
-        print!("{c:>8}");
+        out!(out, "{c:>8}");
     }
-    println!();
+    outln!(out);
     for (g, row) in gs.iter().zip(&table) {
-        print!("{g:>7}");
+        out!(out, "{g:>7}");
         for v in row {
             match v {
-                Some(v) => print!("{:>8}", format!("{v:.0}")),
-                None => print!("{:>8}", "—"),
+                Some(v) => out!(out, "{:>8}", format!("{v:.0}")),
+                None => out!(out, "{:>8}", "—"),
             }
         }
-        println!();
+        outln!(out);
     }
-    Ok(())
+    print_report(&out)
 }
