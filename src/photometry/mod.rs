@@ -5,7 +5,10 @@ pub mod error;
 pub mod ies;
 pub mod ldt;
 pub mod luminaire;
+pub mod lut;
 pub mod opening;
+pub mod plot;
+pub mod solid;
 pub mod text;
 pub mod web;
 
