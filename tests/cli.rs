@@ -14,7 +14,11 @@ fn lumiview(args: &[&str]) -> Output {
 
 fn json(args: &[&str]) -> serde_json::Value {
     let out = lumiview(args);
-    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
@@ -38,14 +42,23 @@ fn info_json_has_the_summary_fields() {
     assert!(v["labels"].as_array().unwrap().iter().any(|l| l["key"] == "MANUFAC"));
     // The text form carries the same facts.
     let text = String::from_utf8(lumiview(&["info", ASA]).stdout).unwrap();
-    for want in ["IES LM-63-2002", "C0C180", "13000.0 lm", "integrated flux", "Rectangle", "American Electric"] {
+    for want in [
+        "IES LM-63-2002",
+        "C0C180",
+        "13000.0 lm",
+        "integrated flux",
+        "Rectangle",
+        "American Electric",
+    ] {
         assert!(text.contains(want), "missing `{want}` in:\n{text}");
     }
 }
 
 #[test]
 fn sample_json_form() {
-    let v = json(&["sample", ASA, "--at", "0,0", "--at", "90,62.5", "--at", "0,120", "--json"]);
+    let v = json(&[
+        "sample", ASA, "--at", "0,0", "--at", "90,62.5", "--at", "0,120", "--json",
+    ]);
     assert_eq!(v["unit"], "cd");
     let s = v["samples"].as_array().unwrap();
     assert_eq!(s.len(), 3);
@@ -61,7 +74,12 @@ fn luminance_json_defaults_to_the_glare_grid() {
     let v = json(&["luminance", ASA, "--json"]);
     assert_eq!(v["unit"], "cd/m2");
     let c: Vec<f64> = v["c"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    let g: Vec<f64> = v["gamma"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let g: Vec<f64> = v["gamma"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
     assert_eq!(c.len(), 24);
     assert_eq!((c[0], c[23]), (0.0, 345.0));
     assert_eq!(g, vec![65.0, 70.0, 75.0, 80.0, 85.0]);

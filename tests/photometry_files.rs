@@ -100,23 +100,83 @@ fn photometric_viewer_ies_openings() {
     let ft = 0.3048;
     let cases: [(&str, OpeningShape, f64, f64, f64); 19] = [
         ("absolute_photometry.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
-        ("absolute_photometry_with_multiplier.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
-        ("ellipse_opening_along_length.ies", OpeningShape::VerticalCylinder, 0.34, 0.12, 0.56),
-        ("ellipse_opening_along_width.ies", OpeningShape::VerticalCylinder, 0.34, 0.12, 0.56),
-        ("ellipsoid_opening_along_length.ies", OpeningShape::HorizontalCylinderAlongLength, 0.34, 0.12, 0.56),
-        ("ellipsoid_opening_along_width.ies", OpeningShape::HorizontalCylinderAlongWidth, 0.34, 0.12, 0.56),
-        ("horizontal_cylinder_opening_along_length.ies", OpeningShape::HorizontalCylinderAlongLength, 0.12, 0.34, 0.34),
-        ("horizontal_cylinder_opening_along_width.ies", OpeningShape::HorizontalCylinderAlongWidth, 0.34, 0.12, 0.34),
+        (
+            "absolute_photometry_with_multiplier.ies",
+            OpeningShape::Ellipse,
+            0.12,
+            0.12,
+            0.0,
+        ),
+        (
+            "ellipse_opening_along_length.ies",
+            OpeningShape::VerticalCylinder,
+            0.34,
+            0.12,
+            0.56,
+        ),
+        (
+            "ellipse_opening_along_width.ies",
+            OpeningShape::VerticalCylinder,
+            0.34,
+            0.12,
+            0.56,
+        ),
+        (
+            "ellipsoid_opening_along_length.ies",
+            OpeningShape::HorizontalCylinderAlongLength,
+            0.34,
+            0.12,
+            0.56,
+        ),
+        (
+            "ellipsoid_opening_along_width.ies",
+            OpeningShape::HorizontalCylinderAlongWidth,
+            0.34,
+            0.12,
+            0.56,
+        ),
+        (
+            "horizontal_cylinder_opening_along_length.ies",
+            OpeningShape::HorizontalCylinderAlongLength,
+            0.12,
+            0.34,
+            0.34,
+        ),
+        (
+            "horizontal_cylinder_opening_along_width.ies",
+            OpeningShape::HorizontalCylinderAlongWidth,
+            0.34,
+            0.12,
+            0.34,
+        ),
         ("imperial_units.ies", OpeningShape::Box, 0.34 * ft, 0.12 * ft, 0.56 * ft),
         ("label_lines.ies", OpeningShape::Box, 0.34 * ft, 0.12 * ft, 0.56 * ft),
         ("metric_units.ies", OpeningShape::Box, 0.34, 0.12, 0.56),
         ("point_opening.ies", OpeningShape::Point, 0.0, 0.0, 0.0),
         ("rectangular_opening.ies", OpeningShape::Rectangle, 0.34, 0.12, 0.0),
-        ("rectangular_opening_with_height.ies", OpeningShape::Box, 0.34, 0.12, 0.56),
+        (
+            "rectangular_opening_with_height.ies",
+            OpeningShape::Box,
+            0.34,
+            0.12,
+            0.56,
+        ),
         ("relative_photometry.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
-        ("relative_photometry_with_multiplier.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
+        (
+            "relative_photometry_with_multiplier.ies",
+            OpeningShape::Ellipse,
+            0.12,
+            0.12,
+            0.0,
+        ),
         ("round_opening.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
-        ("round_opening_with_height.ies", OpeningShape::VerticalCylinder, 0.12, 0.12, 0.34),
+        (
+            "round_opening_with_height.ies",
+            OpeningShape::VerticalCylinder,
+            0.12,
+            0.12,
+            0.34,
+        ),
         ("sphere_opening.ies", OpeningShape::Ellipsoid, 0.12, 0.12, 0.12),
     ];
     for (file, shape, l, w, h) in cases {
@@ -131,12 +191,24 @@ fn photometric_viewer_ies_openings() {
     let r = open("photometric-viewer/ies95/rectangular_opening.ies");
     assert_close(r.luminance(0.0, 0.0).unwrap(), 2200.0 / (0.34 * 0.12), 1e-12, "L(0,0)");
     let i60 = r.intensity(0.0, 60.0);
-    assert_close(r.luminance(0.0, 60.0).unwrap(), i60 / (0.34 * 0.12 * 0.5), 1e-9, "L(0,60)");
+    assert_close(
+        r.luminance(0.0, 60.0).unwrap(),
+        i60 / (0.34 * 0.12 * 0.5),
+        1e-9,
+        "L(0,60)",
+    );
     // A sphere shows π r² from every direction.
     let s = open("photometric-viewer/ies95/sphere_opening.ies");
-    assert_close(s.luminance(123.0, 45.0).unwrap(), s.intensity(123.0, 45.0) / (PI * 0.06 * 0.06), 1e-9, "sphere");
+    assert_close(
+        s.luminance(123.0, 45.0).unwrap(),
+        s.intensity(123.0, 45.0) / (PI * 0.06 * 0.06),
+        1e-9,
+        "sphere",
+    );
     // A point has no luminance.
-    assert!(open("photometric-viewer/ies95/point_opening.ies").luminance(0.0, 0.0).is_none());
+    assert!(open("photometric-viewer/ies95/point_opening.ies")
+        .luminance(0.0, 0.0)
+        .is_none());
 }
 
 #[test]
@@ -183,7 +255,11 @@ fn eulumdat_symmetries_expand_correctly() {
     assert_eq!(raw.mc, 24);
     for k in [0usize, 5, 13, 23] {
         let c = raw.c_deg[k];
-        assert_eq!(none.intensity(c, raw.gamma_deg[4]), raw.intensities[k * raw.ng + 4], "plane C{c}");
+        assert_eq!(
+            none.intensity(c, raw.gamma_deg[4]),
+            raw.intensities[k * raw.ng + 4],
+            "plane C{c}"
+        );
     }
     // The 345°–360° gap interpolates towards C0.
     let mid = none.intensity(352.5, 10.0);
@@ -256,10 +332,19 @@ fn flux_agrees_with_declared_flux_where_the_file_is_consistent() {
     assert_close(asa.integrated_lor().unwrap(), 0.7354, 1e-3, "ASA LOR");
     // Its hand conversion to EULUMDAT declares LORL 73.5 % of 13000 lm.
     let asa_ldt = open("pairs/luxcore_ASA_15M_R2.ldt");
-    assert_close(asa_ldt.flux_lm(), asa_ldt.declared_luminaire_flux_lm.unwrap(), 0.01, "ASA as LDT");
+    assert_close(
+        asa_ldt.flux_lm(),
+        asa_ldt.declared_luminaire_flux_lm.unwrap(),
+        0.01,
+        "ASA as LDT",
+    );
     // Analytic Type B floodlight: I = 1000 cos²γ (1 + 0.5 x + 0.25 y) below the horizon integrates
     // to 2000π/3 lm (the odd terms cancel).
-    for f in ["fixtures/type_b.ies", "fixtures/type_a.ies", "fixtures/type_b_lateral.ies"] {
+    for f in [
+        "fixtures/type_b.ies",
+        "fixtures/type_a.ies",
+        "fixtures/type_b_lateral.ies",
+    ] {
         assert_close(open(f).flux_lm(), 2000.0 * PI / 3.0, 0.005, f);
     }
     // Orientation pairs: the LDT files declare lamp flux × LORL; the IES files are absolute.
@@ -293,14 +378,20 @@ fn ies_and_eulumdat_of_the_same_luminaire_agree() {
         let ldt = open(&format!("pairs/{kind}.ldt"));
         for (c, g) in sphere_samples() {
             let (a, b) = (ies.intensity(c, g), ldt.intensity(c, g));
-            assert!((a - b).abs() <= 1e-3 * a.abs().max(b.abs()) + 1e-6, "{kind} at C{c} γ{g}: IES {a} vs LDT {b}");
+            assert!(
+                (a - b).abs() <= 1e-3 * a.abs().max(b.abs()) + 1e-6,
+                "{kind} at C{c} γ{g}: IES {a} vs LDT {b}"
+            );
         }
     }
     let ies = open("misc/luxcore_ASA_15M_R2.ies");
     let ldt = open("pairs/luxcore_ASA_15M_R2.ldt");
     for (c, g) in sphere_samples() {
         let (a, b) = (ies.intensity(c, g), ldt.intensity(c, g));
-        assert!((a - b).abs() <= 1e-3 * a.max(b) + 1e-3, "ASA at C{c} γ{g}: IES {a} vs LDT {b}");
+        assert!(
+            (a - b).abs() <= 1e-3 * a.max(b) + 1e-3,
+            "ASA at C{c} γ{g}: IES {a} vs LDT {b}"
+        );
     }
 }
 
@@ -351,7 +442,11 @@ fn type_b_and_type_a_are_converted_not_reinterpreted() {
         let down = (-d[2]).max(0.0);
         1000.0 * down * down * (1.0 + 0.5 * d[0] + if lateral { 0.0 } else { 0.25 * d[1] })
     };
-    for (file, lateral) in [("fixtures/type_b.ies", false), ("fixtures/type_a.ies", false), ("fixtures/type_b_lateral.ies", true)] {
+    for (file, lateral) in [
+        ("fixtures/type_b.ies", false),
+        ("fixtures/type_a.ies", false),
+        ("fixtures/type_b_lateral.ies", true),
+    ] {
         let ph = open(file);
         let mut worst: f64 = 0.0;
         for (c, g) in sphere_samples() {
@@ -367,8 +462,14 @@ fn type_b_and_type_a_are_converted_not_reinterpreted() {
     }
     // Read as Type C (the known bug), the same numbers would put the peak somewhere else entirely.
     let b = open("fixtures/type_b.ies");
-    assert!(b.intensity(0.0, 60.0) > b.intensity(180.0, 60.0), "+X side is brighter (1 + 0.5 x)");
-    assert!(b.intensity(90.0, 60.0) > b.intensity(270.0, 60.0), "+Y side is brighter (1 + 0.25 y)");
+    assert!(
+        b.intensity(0.0, 60.0) > b.intensity(180.0, 60.0),
+        "+X side is brighter (1 + 0.5 x)"
+    );
+    assert!(
+        b.intensity(90.0, 60.0) > b.intensity(270.0, 60.0),
+        "+Y side is brighter (1 + 0.25 y)"
+    );
 }
 
 #[test]
@@ -410,8 +511,13 @@ fn tilt_include_with_shared_lines_and_a_chosen_tilt() {
         },
     );
     assert_close(file.intensity(0.0, 0.0), 90.0, 1e-12, "TILT=<file> at 45°");
-    let e = load(&data("fixtures/tilt_file_missing.ies"), &LoadOptions::default()).unwrap_err().to_string();
-    assert!(e.contains("tilt_file_missing.ies:3") && e.contains("no_such_tilt_file.dat"), "{e}");
+    let e = load(&data("fixtures/tilt_file_missing.ies"), &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("tilt_file_missing.ies:3") && e.contains("no_such_tilt_file.dat"),
+        "{e}"
+    );
 }
 
 trait Keywords {
@@ -456,7 +562,10 @@ fn lm63_2019_generation_type_is_not_a_factor() {
         lumiview::photometry::ies::file_generation_description(1.1),
         Some("test at an accredited lab")
     );
-    assert_eq!(raw.keyword("LUMINAIRE"), Some("uses the 2019 fields\nand a MORE continuation"));
+    assert_eq!(
+        raw.keyword("LUMINAIRE"),
+        Some("uses the 2019 fields\nand a MORE continuation")
+    );
     assert_eq!(raw.keyword("_USERKEY"), Some("user keywords are kept"));
     // Before 2019 the same position is the ballast-lamp factor and is applied.
     let old = open("fixtures/factors_2002.ies");
@@ -475,7 +584,9 @@ fn full_circle_with_and_without_the_360_entry() {
 }
 
 fn ies_err(text: &str) -> String {
-    load_from_text(text, "bad.ies", &LoadOptions::default()).unwrap_err().to_string()
+    load_from_text(text, "bad.ies", &LoadOptions::default())
+        .unwrap_err()
+        .to_string()
 }
 
 #[test]
@@ -491,9 +602,15 @@ fn bad_files_are_errors_that_name_file_line_and_field() {
     let cases = [
         (good.replace("100 50 10", "100 NaN 10"), "candela values"),
         (good.replace("100 50 10", "100 -5 10"), "negative candela"),
-        (good.replace("2 1000 2.0 3 1 1 2", "2 1000 2.0 3 1 7 2"), "unknown photometric type 7"),
+        (
+            good.replace("2 1000 2.0 3 1 1 2", "2 1000 2.0 3 1 7 2"),
+            "unknown photometric type 7",
+        ),
         (good.replace("2 1000 2.0 3 1 1 2", "2 1000 2.0 3 1 1 3"), "units type"),
-        (good.replace("2 1000 2.0 3 1", "2 1000 2.0 3.5 1"), "number of vertical angles"),
+        (
+            good.replace("2 1000 2.0 3 1", "2 1000 2.0 3.5 1"),
+            "number of vertical angles",
+        ),
         (good.replace("0 45 90", "0 90 45"), "vertical angles"),
         (good.replace("TILT=NONE", "TILT="), "TILT"),
         (good.replace("TILT=NONE", "[TILT] NONE"), "TILT"),
@@ -505,9 +622,16 @@ fn bad_files_are_errors_that_name_file_line_and_field() {
     }
     // EULUMDAT: truncated, bad symmetry, letters in a number.
     let ldt = std::fs::read_to_string(data("photometric-viewer/ldt/symmetry_to_c0c180.ldt")).unwrap();
-    let lerr = |t: &str| load_from_text(t, "bad.ldt", &LoadOptions::default()).unwrap_err().to_string();
+    let lerr = |t: &str| {
+        load_from_text(t, "bad.ldt", &LoadOptions::default())
+            .unwrap_err()
+            .to_string()
+    };
     let e = lerr(&ldt[..ldt.len() / 2]);
-    assert!(e.starts_with("bad.ldt") && e.contains("luminous intensities") && e.contains("truncated"), "{e}");
+    assert!(
+        e.starts_with("bad.ldt") && e.contains("luminous intensities") && e.contains("truncated"),
+        "{e}"
+    );
     let mut lines: Vec<&str> = ldt.lines().collect();
     lines[2] = "5";
     let e = lerr(&lines.join("\n"));
@@ -517,6 +641,8 @@ fn bad_files_are_errors_that_name_file_line_and_field() {
     let e = lerr(&lines.join("\n"));
     assert!(e.contains("bad.ldt:4") && e.contains("thirty-six"), "{e}");
     // A missing file names the path.
-    let e = load(Path::new("/no/such/file.ies"), &LoadOptions::default()).unwrap_err().to_string();
+    let e = load(Path::new("/no/such/file.ies"), &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/no/such/file.ies"), "{e}");
 }

@@ -133,7 +133,11 @@ impl IesFile {
     /// The factor applied to every candela value: multiplier × ballast factor × (before 2019)
     /// ballast-lamp photometric factor. The 2019 file-generation type is not a factor.
     pub fn candela_scale(&self) -> f64 {
-        let blp = if self.version >= IesVersion::Lm63_2019 { 1.0 } else { self.line11_second };
+        let blp = if self.version >= IesVersion::Lm63_2019 {
+            1.0
+        } else {
+            self.line11_second
+        };
         self.multiplier * self.ballast_factor * blp
     }
 
@@ -159,11 +163,17 @@ pub fn file_generation_description(code: f64) -> Option<&'static str> {
         (1.00000, "test at an unaccredited lab"),
         (1.00100, "test at an unaccredited lab, lumen scaled"),
         (1.01000, "test at an unaccredited lab, interpolated angle set"),
-        (1.01100, "test at an unaccredited lab, interpolated angle set, lumen scaled"),
+        (
+            1.01100,
+            "test at an unaccredited lab, interpolated angle set, lumen scaled",
+        ),
         (1.10000, "test at an accredited lab"),
         (1.10100, "test at an accredited lab, lumen scaled"),
         (1.11000, "test at an accredited lab, interpolated angle set"),
-        (1.11100, "test at an accredited lab, interpolated angle set, lumen scaled"),
+        (
+            1.11100,
+            "test at an accredited lab, interpolated angle set, lumen scaled",
+        ),
     ];
     TABLE.iter().find(|(c, _)| (c - code).abs() < 2e-6).map(|(_, d)| *d)
 }
@@ -215,7 +225,12 @@ fn read_tilt(tokens: &mut Tokens<'_>, file: &str, source: TiltSource) -> Result<
         }
     }
     if let Some(f) = factors.iter().find(|f| **f < 0.0) {
-        return Err(parse_error(file, None, "TILT multiplying factors", format!("found negative factor {f}")));
+        return Err(parse_error(
+            file,
+            None,
+            "TILT multiplying factors",
+            format!("found negative factor {f}"),
+        ));
     }
     Ok(TiltTable {
         source,
@@ -298,7 +313,13 @@ pub fn parse(
     } else if tilt_text.eq_ignore_ascii_case("INCLUDE") {
         Some(read_tilt(&mut tokens, file, TiltSource::Include)?)
     } else if tilt_text.is_empty() {
-        return Err(parse_error(file, Some(tilt_idx + 1), "TILT", "expected NONE, INCLUDE or a file name after `TILT=`").into());
+        return Err(parse_error(
+            file,
+            Some(tilt_idx + 1),
+            "TILT",
+            "expected NONE, INCLUDE or a file name after `TILT=`",
+        )
+        .into());
     } else {
         let tilt_src = load_tilt(tilt_text).map_err(|e| {
             parse_error(
@@ -311,13 +332,23 @@ pub fn parse(
         let tls = lines(&tilt_src);
         let tilt_file_label = format!("{file} (TILT file {tilt_text})");
         let mut tt = Tokens::new(&tilt_file_label, &tls, 1, true);
-        Some(read_tilt(&mut tt, &tilt_file_label, TiltSource::File(tilt_text.to_string()))?)
+        Some(read_tilt(
+            &mut tt,
+            &tilt_file_label,
+            TiltSource::File(tilt_text.to_string()),
+        )?)
     };
 
     let lamp_line = tokens.line();
     let lamp_count = tokens.number("number of lamps")?;
     if lamp_count < 0.0 || lamp_count.fract() != 0.0 {
-        return Err(parse_error(file, Some(lamp_line), "number of lamps", format!("expected a whole number ≥ 0, found {lamp_count}")).into());
+        return Err(parse_error(
+            file,
+            Some(lamp_line),
+            "number of lamps",
+            format!("expected a whole number ≥ 0, found {lamp_count}"),
+        )
+        .into());
     }
     let lumens_line = tokens.line();
     let lumens_per_lamp = tokens.number("lumens per lamp")?;
@@ -333,7 +364,13 @@ pub fn parse(
     let mult_line = tokens.line();
     let multiplier = tokens.number("candela multiplier")?;
     if multiplier <= 0.0 {
-        return Err(parse_error(file, Some(mult_line), "candela multiplier", format!("expected a positive factor, found {multiplier}")).into());
+        return Err(parse_error(
+            file,
+            Some(mult_line),
+            "candela multiplier",
+            format!("expected a positive factor, found {multiplier}"),
+        )
+        .into());
     }
     let n_vert = tokens.count("number of vertical angles", 1, 100_000)? as usize;
     let n_horiz = tokens.count("number of horizontal angles", 1, 100_000)? as usize;
@@ -359,7 +396,13 @@ pub fn parse(
         1.0 => 1,
         2.0 => 2,
         other => {
-            return Err(parse_error(file, Some(units_line), "units type", format!("expected 1 (feet) or 2 (metres), found {other}")).into())
+            return Err(parse_error(
+                file,
+                Some(units_line),
+                "units type",
+                format!("expected 1 (feet) or 2 (metres), found {other}"),
+            )
+            .into())
         }
     };
     let width = tokens.number("luminous opening width")?;
@@ -368,7 +411,13 @@ pub fn parse(
     let bf_line = tokens.line();
     let ballast_factor = tokens.number("ballast factor")?;
     if ballast_factor <= 0.0 {
-        return Err(parse_error(file, Some(bf_line), "ballast factor", format!("expected a positive factor, found {ballast_factor}")).into());
+        return Err(parse_error(
+            file,
+            Some(bf_line),
+            "ballast factor",
+            format!("expected a positive factor, found {ballast_factor}"),
+        )
+        .into());
     }
     let second_name = if version >= IesVersion::Lm63_2019 {
         "file generation type"
@@ -379,10 +428,18 @@ pub fn parse(
     let line11_second = tokens.number(second_name)?;
     if version >= IesVersion::Lm63_2019 {
         if file_generation_description(line11_second).is_none() {
-            warnings.push(format!("line {second_line}: unrecognised LM-63-2019 file generation type {line11_second}"));
+            warnings.push(format!(
+                "line {second_line}: unrecognised LM-63-2019 file generation type {line11_second}"
+            ));
         }
     } else if line11_second <= 0.0 {
-        return Err(parse_error(file, Some(second_line), second_name, format!("expected a positive factor, found {line11_second}")).into());
+        return Err(parse_error(
+            file,
+            Some(second_line),
+            second_name,
+            format!("expected a positive factor, found {line11_second}"),
+        )
+        .into());
     }
     let input_watts = tokens.number("input watts")?;
     let vertical_deg = tokens.numbers(n_vert, "vertical angles")?;
@@ -472,7 +529,10 @@ mod tests {
     fn truncated_file_names_the_field() {
         let cut = &MINIMAL[..MINIMAL.len() - 4];
         let e = parse(cut, "cut.ies", &no_tilt).unwrap_err().to_string();
-        assert!(e.contains("cut.ies") && e.contains("candela values") && e.contains("truncated"), "{e}");
+        assert!(
+            e.contains("cut.ies") && e.contains("candela values") && e.contains("truncated"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -485,7 +545,12 @@ mod tests {
     #[test]
     fn huge_table_in_a_short_file_is_an_error_not_an_allocation() {
         // 100000 × 100000 candela values declared (80 GB as f64), both angle lists present.
-        let angles = |n: usize| (0..n).map(|i| format!("{}", i as f64 * 1e-3)).collect::<Vec<_>>().join(" ");
+        let angles = |n: usize| {
+            (0..n)
+                .map(|i| format!("{}", i as f64 * 1e-3))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
         let t = format!(
             "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 100000 100000 1 2 0 0 0\n1 1 10\n{}\n{}\n0 0\n",
             angles(100_000),

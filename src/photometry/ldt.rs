@@ -114,17 +114,45 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
     let company = next_line("company identification")?.1;
     let ityp_l = next_line("type indicator Ityp")?;
     let ityp_line = ityp_l.0;
-    let type_indicator = to_count(file, ityp_line, "type indicator Ityp", num(file, ityp_l, "type indicator Ityp")?, 0, 3)?;
+    let type_indicator = to_count(
+        file,
+        ityp_line,
+        "type indicator Ityp",
+        num(file, ityp_l, "type indicator Ityp")?,
+        0,
+        3,
+    )?;
     let isym_l = next_line("symmetry indicator Isym")?;
     let isym_line = isym_l.0;
-    let symmetry = to_count(file, isym_line, "symmetry indicator Isym", num(file, isym_l, "symmetry indicator Isym")?, 0, 4)? as u8;
+    let symmetry = to_count(
+        file,
+        isym_line,
+        "symmetry indicator Isym",
+        num(file, isym_l, "symmetry indicator Isym")?,
+        0,
+        4,
+    )? as u8;
     let mc_l = next_line("number of C planes Mc")?;
     let mc_line = mc_l.0;
-    let mc = to_count(file, mc_line, "number of C planes Mc", num(file, mc_l, "number of C planes Mc")?, 1, 100_000)? as usize;
+    let mc = to_count(
+        file,
+        mc_line,
+        "number of C planes Mc",
+        num(file, mc_l, "number of C planes Mc")?,
+        1,
+        100_000,
+    )? as usize;
     let dc = num(file, next_line("C plane distance Dc")?, "C plane distance Dc")?;
     let ng_l = next_line("number of intensities per plane Ng")?;
     let ng_line = ng_l.0;
-    let ng = to_count(file, ng_line, "number of intensities per plane Ng", num(file, ng_l, "Ng")?, 2, 100_000)? as usize;
+    let ng = to_count(
+        file,
+        ng_line,
+        "number of intensities per plane Ng",
+        num(file, ng_l, "Ng")?,
+        2,
+        100_000,
+    )? as usize;
     let dg = num(file, next_line("γ distance Dg")?, "γ distance Dg")?;
     let report = next_line("measurement report number")?.1;
     let luminaire_name = next_line("luminaire name")?.1;
@@ -148,16 +176,30 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
         let line = l.0;
         *d = num(file, l, name)?;
         if *d < 0.0 {
-            return Err(parse_error(file, Some(line), name, format!("expected a size ≥ 0, found {d}")));
+            return Err(parse_error(
+                file,
+                Some(line),
+                name,
+                format!("expected a size ≥ 0, found {d}"),
+            ));
         }
     }
-    let dff_percent = num(file, next_line("downward flux fraction DFF")?, "downward flux fraction DFF")?;
+    let dff_percent = num(
+        file,
+        next_line("downward flux fraction DFF")?,
+        "downward flux fraction DFF",
+    )?;
     let lor_percent = num(file, next_line("light output ratio LORL")?, "light output ratio LORL")?;
     let cf_l = next_line("conversion factor for luminous intensities")?;
     let cf_line = cf_l.0;
     let mut conversion_factor = num(file, cf_l, "conversion factor for luminous intensities")?;
     if conversion_factor < 0.0 {
-        return Err(parse_error(file, Some(cf_line), "conversion factor", format!("expected a factor > 0, found {conversion_factor}")));
+        return Err(parse_error(
+            file,
+            Some(cf_line),
+            "conversion factor",
+            format!("expected a factor > 0, found {conversion_factor}"),
+        ));
     }
     if conversion_factor == 0.0 {
         warnings.push(format!("line {cf_line}: conversion factor 0 read as 1"));
@@ -166,16 +208,32 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
     let measurement_tilt_deg = num(file, next_line("measurement tilt")?, "measurement tilt")?;
     let nsets_l = next_line("number of lamp sets")?;
     let nsets_line = nsets_l.0;
-    let nsets = to_count(file, nsets_line, "number of lamp sets", num(file, nsets_l, "number of lamp sets")?, 1, 20)? as usize;
+    let nsets = to_count(
+        file,
+        nsets_line,
+        "number of lamp sets",
+        num(file, nsets_l, "number of lamp sets")?,
+        1,
+        20,
+    )? as usize;
     let mut lamp_sets = Vec::with_capacity(nsets);
     for k in 0..nsets {
-        let count = num(file, next_line(&format!("lamp set {} number of lamps", k + 1))?, "number of lamps")?;
+        let count = num(
+            file,
+            next_line(&format!("lamp set {} number of lamps", k + 1))?,
+            "number of lamps",
+        )?;
         let lamp_type = next_line("lamp type")?.1;
         let fl = next_line("lamp set total luminous flux")?;
         let fl_line = fl.0;
         let flux_lm = num(file, fl, "lamp set total luminous flux (lm)")?;
         if flux_lm < 0.0 {
-            return Err(parse_error(file, Some(fl_line), "lamp set total luminous flux", format!("expected ≥ 0 lm, found {flux_lm}")));
+            return Err(parse_error(
+                file,
+                Some(fl_line),
+                "lamp set total luminous flux",
+                format!("expected ≥ 0 lm, found {flux_lm}"),
+            ));
         }
         let colour = next_line("colour temperature")?.1;
         let cri = next_line("colour rendering")?.1;
@@ -246,19 +304,34 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
     };
     let planes = lf.stored_planes().len();
     let first_table_line = tokens.line();
-    let mut intensities = Vec::with_capacity(planes * ng);
-    for _ in 0..planes * ng {
+    // Mc and Ng come from the file: reserve no more than the numbers left (a huge table declared
+    // in a short file fails with "truncated" instead of allocating gigabytes first).
+    let table_len = planes.saturating_mul(ng);
+    let mut intensities = Vec::with_capacity(table_len.min(tokens.remaining()));
+    for _ in 0..table_len {
         let v = tokens.number_comma_decimal("luminous intensities").map_err(|mut e| {
-            e.message = format!("{} (expected {planes} planes × {ng} values for symmetry {symmetry})", e.message);
+            e.message = format!(
+                "{} (expected {planes} planes × {ng} values for symmetry {symmetry})",
+                e.message
+            );
             e
         })?;
         if v < 0.0 {
-            return Err(parse_error(file, Some(first_table_line), "luminous intensities", format!("negative intensity {v}")));
+            return Err(parse_error(
+                file,
+                Some(first_table_line),
+                "luminous intensities",
+                format!("negative intensity {v}"),
+            ));
         }
         intensities.push(v);
     }
     if tokens.remaining() > 0 {
-        lf.warnings.push(format!("line {}: {} values after the intensity table ignored", tokens.line(), tokens.remaining()));
+        lf.warnings.push(format!(
+            "line {}: {} values after the intensity table ignored",
+            tokens.line(),
+            tokens.remaining()
+        ));
     }
     lf.intensities = intensities;
     Ok(lf)
@@ -267,6 +340,27 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn huge_table_in_a_short_file_is_an_error_not_an_allocation() {
+        // Mc = Ng = 100000 (80 GB of intensities as f64), both angle lists present.
+        let mut t = String::from("X\n1\n0\n100000\n0\n100000\n1\nr\nn\nn\nf\nd\n");
+        t.push_str("0\n0\n0\n0\n0\n0\n0\n0\n0\n100\n100\n1\n0\n1\n1\nt\n1000\n3000\n80\n10\n");
+        for _ in 0..10 {
+            t.push_str("0\n");
+        }
+        for k in 0..2 {
+            for i in 0..100_000 {
+                t.push_str(&format!("{}\n", i as f64 * 0.0018 * f64::from(2 - k)));
+            }
+        }
+        t.push_str("0\n");
+        let e = parse(&t, "big.ldt").unwrap_err();
+        assert!(
+            e.field == "luminous intensities" && e.message.contains("truncated"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn isym3_planes_start_at_c270() {

@@ -129,7 +129,10 @@ impl Photometry {
     /// Luminance in cd/m² of the luminous opening seen from (C, γ) in degrees: I / A_proj.
     /// `None` where the projected area is zero.
     pub fn luminance(&self, c_deg: f64, gamma_deg: f64) -> Option<f64> {
-        luminance(self.intensity(c_deg, gamma_deg), self.opening.projected_area(c_deg, gamma_deg))
+        luminance(
+            self.intensity(c_deg, gamma_deg),
+            self.opening.projected_area(c_deg, gamma_deg),
+        )
     }
 }
 
@@ -181,7 +184,13 @@ pub fn load_from_text(text: &str, name: &str, opts: &LoadOptions) -> Result<Phot
         from_ldt(ldt::parse(text, name)?, name, opts)
     } else {
         let no_files = |t: &str| -> Result<String, PhotometryError> {
-            Err(parse_error(name, None, "TILT", format!("TILT={t} names a file, which cannot be read for in-memory text")).into())
+            Err(parse_error(
+                name,
+                None,
+                "TILT",
+                format!("TILT={t} names a file, which cannot be read for in-memory text"),
+            )
+            .into())
         };
         from_ies(ies::parse(text, name, &no_files)?, name, opts)
     }
@@ -189,7 +198,11 @@ pub fn load_from_text(text: &str, name: &str, opts: &LoadOptions) -> Result<Phot
 
 fn looks_like_ies(text: &str) -> bool {
     let first = text.lines().next().unwrap_or("").trim_start().to_ascii_uppercase();
-    first.starts_with("IES") || text.lines().take(200).any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
+    first.starts_with("IES")
+        || text
+            .lines()
+            .take(200)
+            .any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
 }
 
 fn ab_step(opts: &LoadOptions, h: &[f64], v: &[f64]) -> f64 {
@@ -226,7 +239,12 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     let mut warnings = f.warnings.clone();
     let tilt_applied_deg = apply_tilt(&mut web, f.tilt.as_ref(), opts, name)?;
     let unit = if f.units == 1 { METRES_PER_FOOT } else { 1.0 };
-    let (opening, warn) = classify_ies(f.width * unit, f.length * unit, f.height * unit, f.version < IesVersion::Lm63_2002);
+    let (opening, warn) = classify_ies(
+        f.width * unit,
+        f.length * unit,
+        f.height * unit,
+        f.version < IesVersion::Lm63_2002,
+    );
     warnings.extend(warn);
     let lamp_flux_lm = (!f.is_absolute()).then_some(f.lamp_count * f.lumens_per_lamp);
     let labels = f
@@ -298,7 +316,11 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     let Some(set) = f.lamp_sets.get(opts.lamp_set) else {
         return Err(PhotometryError::InvalidArgument {
             name: "lamp_set",
-            message: format!("{name} has {} lamp set(s); set {} asked for", f.lamp_sets.len(), opts.lamp_set + 1),
+            message: format!(
+                "{name} has {} lamp set(s); set {} asked for",
+                f.lamp_sets.len(),
+                opts.lamp_set + 1
+            ),
         });
     };
     let absolute = set.count < 0.0;
@@ -311,7 +333,13 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     let ng = f.ng;
     for w in f.c_deg.windows(2) {
         if w[1] <= w[0] {
-            return Err(parse_error(name, None, "C angles", format!("angles must increase, found {} then {}", w[0], w[1])).into());
+            return Err(parse_error(
+                name,
+                None,
+                "C angles",
+                format!("angles must increase, found {} then {}", w[0], w[1]),
+            )
+            .into());
         }
     }
     if f.c_deg.first().is_some_and(|c| c.abs() > ANGLE_EPS) || f.c_deg.last().is_some_and(|c| *c >= 360.0 - ANGLE_EPS) {
@@ -361,7 +389,10 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
                         name,
                         None,
                         "C angles",
-                        format!("plane C{c} maps to C{src} under symmetry {}, which the file does not store", f.symmetry),
+                        format!(
+                            "plane C{c} maps to C{src} under symmetry {}, which the file does not store",
+                            f.symmetry
+                        ),
                     )
                 })?;
             vals.extend(f.intensities[k * ng..(k + 1) * ng].iter().map(|v| v * scale));
@@ -398,7 +429,11 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         LuminousOpening::point()
     } else if ba == 0.0 {
         let mut o = LuminousOpening::new(
-            if has_sides { OpeningShape::DiscWithSides } else { OpeningShape::Ellipse },
+            if has_sides {
+                OpeningShape::DiscWithSides
+            } else {
+                OpeningShape::Ellipse
+            },
             m(la),
             m(la),
             heights.iter().copied().fold(0.0, f64::max),
@@ -407,7 +442,11 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         o
     } else {
         let mut o = LuminousOpening::new(
-            if has_sides { OpeningShape::RectangleWithSides } else { OpeningShape::Rectangle },
+            if has_sides {
+                OpeningShape::RectangleWithSides
+            } else {
+                OpeningShape::Rectangle
+            },
             m(la),
             m(ba),
             heights.iter().copied().fold(0.0, f64::max),

@@ -134,7 +134,9 @@ impl<'a> Tokens<'a> {
 
     /// `n` finite numbers.
     pub fn numbers(&mut self, n: usize, field: &str) -> Result<Vec<f64>, ParseError> {
-        let mut out = Vec::with_capacity(n);
+        // `n` comes from the file: reserve no more than the tokens left, so a huge declared count
+        // in a short file fails with "truncated" instead of allocating gigabytes first.
+        let mut out = Vec::with_capacity(n.min(self.remaining()));
         for i in 0..n {
             let v = self.number(field).map_err(|mut e| {
                 e.message = format!("{} (value {} of {n})", e.message, i + 1);
@@ -217,6 +219,14 @@ mod tests {
             let mut t = Tokens::new("f", &ls, 1, true);
             assert!(t.number("x").is_err(), "{bad} accepted");
         }
+    }
+
+    #[test]
+    fn huge_declared_count_does_not_allocate() {
+        let ls = ["1 2 3"];
+        let mut t = Tokens::new("f", &ls, 1, true);
+        let e = t.numbers(usize::MAX, "candela values").unwrap_err();
+        assert!(e.field == "candela values" && e.message.contains("truncated"), "{e}");
     }
 
     #[test]

@@ -158,7 +158,11 @@ fn check_values(g: &NativeGrid<'_>) -> Result<(), ParseError> {
     for (i, &x) in g.values.iter().enumerate() {
         if !(x.is_finite() && (0.0..=MAX_INTENSITY_CD).contains(&x)) {
             let (ih, iv) = (i / g.v.len(), i % g.v.len());
-            let shown = if x.abs() < 1e9 { format!("{x}") } else { format!("{x:e}") };
+            let shown = if x.abs() < 1e9 {
+                format!("{x}")
+            } else {
+                format!("{x:e}")
+            };
             return Err(parse_error(
                 g.file,
                 None,
@@ -183,7 +187,12 @@ impl PhotometricWeb {
         check_increasing(g.file, "vertical angles", g.v)?;
         check_increasing(g.file, "horizontal angles", g.h)?;
         if g.v.len() < 2 {
-            return Err(parse_error(g.file, None, "vertical angles", "at least 2 vertical angles are needed"));
+            return Err(parse_error(
+                g.file,
+                None,
+                "vertical angles",
+                "at least 2 vertical angles are needed",
+            ));
         }
         let (v0, v1) = (g.v[0], g.v[g.v.len() - 1]);
         if v0 < -ANGLE_EPS || v1 > 180.0 + ANGLE_EPS {
@@ -333,7 +342,12 @@ impl PhotometricWeb {
             PhotometricType::A => ("vertical", (v0, v1), "horizontal", (h0, h1)),
             PhotometricType::B => ("horizontal", (h0, h1), "vertical", (v0, v1)),
             PhotometricType::C => {
-                return Err(parse_error(g.file, None, "photometric type", "internal: Type C passed to the A/B path"))
+                return Err(parse_error(
+                    g.file,
+                    None,
+                    "photometric type",
+                    "internal: Type C passed to the A/B path",
+                ))
             }
         };
         if lat.0 < -90.0 - ANGLE_EPS || lat.1 > 90.0 + ANGLE_EPS {
@@ -341,7 +355,10 @@ impl PhotometricWeb {
                 g.file,
                 None,
                 format!("{lat_name} angles"),
-                format!("Type {kind:?} {lat_name} angles must lie within −90…90°, found {}…{}", lat.0, lat.1),
+                format!(
+                    "Type {kind:?} {lat_name} angles must lie within −90…90°, found {}…{}",
+                    lat.0, lat.1
+                ),
             ));
         }
         if rot.0 < -180.0 - ANGLE_EPS || rot.1 > 180.0 + ANGLE_EPS {
@@ -349,7 +366,10 @@ impl PhotometricWeb {
                 g.file,
                 None,
                 format!("{rot_name} angles"),
-                format!("Type {kind:?} {rot_name} angles must lie within −180…180°, found {}…{}", rot.0, rot.1),
+                format!(
+                    "Type {kind:?} {rot_name} angles must lie within −180…180°, found {}…{}",
+                    rot.0, rot.1
+                ),
             ));
         }
         let h_sym = h0.abs() < ANGLE_EPS && g.h.len() > 1;
@@ -572,7 +592,12 @@ mod tests {
     use super::*;
 
     fn grid<'a>(h: &'a [f64], v: &'a [f64], values: &'a [f64]) -> NativeGrid<'a> {
-        NativeGrid { file: "t", h, v, values }
+        NativeGrid {
+            file: "t",
+            h,
+            v,
+            values,
+        }
     }
 
     #[test]
@@ -614,10 +639,18 @@ mod tests {
         let (w, _) = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[0.0, 1000.0])).unwrap();
         let h = (v[1] - v[0]).to_radians(); // 1e-9° as stored next to 60
         let exact = 2.0 * PI * 1000.0 * (h / 2.0) * 60f64.to_radians().sin();
-        assert!(w.flux() >= 0.0 && ((w.flux() - exact) / exact).abs() < 1e-6, "{} vs {exact}", w.flux());
+        assert!(
+            w.flux() >= 0.0 && ((w.flux() - exact) / exact).abs() < 1e-6,
+            "{} vs {exact}",
+            w.flux()
+        );
         let v = [0.0, 5e-324, 90.0];
         let (w, _) = PhotometricWeb::from_type_c(&grid(&[0.0], &v, &[1.0, 1.0, 1.0])).unwrap();
-        assert!(w.flux().is_finite() && (w.flux() - 2.0 * PI).abs() < 1e-9, "{}", w.flux());
+        assert!(
+            w.flux().is_finite() && (w.flux() - 2.0 * PI).abs() < 1e-9,
+            "{}",
+            w.flux()
+        );
     }
 
     #[test]
