@@ -646,3 +646,39 @@ fn bad_files_are_errors_that_name_file_line_and_field() {
         .to_string();
     assert!(e.contains("/no/such/file.ies"), "{e}");
 }
+
+#[test]
+fn implausible_arguments_and_sizes_are_errors() {
+    let good = std::fs::read_to_string(data("fixtures/factors_2002.ies")).unwrap();
+    let e = ies_err(&good.replace("1 2 0.2 0.2 0", "1 2 1e300 0.2 0"));
+    assert!(e.contains("luminous opening width") && e.contains("plausible"), "{e}");
+    let e = load(
+        &data("fixtures/type_b.ies"),
+        &LoadOptions {
+            ab_step_deg: 1e-9,
+            ..LoadOptions::default()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("ab_step_deg"), "{e}");
+    // A full-circle file that stops at 270° is read, with a warning about the interpolated gap.
+    let planes = |angles: &[u32]| {
+        let h: Vec<String> = angles.iter().map(|a| a.to_string()).collect();
+        let v: Vec<&str> = angles.iter().map(|_| "5 5").collect();
+        format!(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2 {} 1 2 0 0 0\n1 1 10\n0 90\n{}\n{}\n",
+            angles.len(),
+            h.join(" "),
+            v.join(" ")
+        )
+    };
+    let partial = planes(&[0, 30, 60, 90, 120, 150, 180, 210, 240, 270]);
+    let ph = load_from_text(&partial, "partial.ies", &LoadOptions::default()).unwrap();
+    assert!(ph.warnings.iter().any(|w| w.contains("270")), "{:?}", ph.warnings);
+    let whole = "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 2 4 1 2 0 0 0\n1 1 10\n0 90\n0 90 180 300\n1 1 2 2 3 3 4 4\n";
+    assert!(load_from_text(whole, "whole.ies", &LoadOptions::default())
+        .unwrap()
+        .warnings
+        .is_empty());
+}

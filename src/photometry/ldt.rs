@@ -263,8 +263,9 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
         gamma_deg.push(tokens.number_comma_decimal("γ angles")?);
     }
     let needs_div = match symmetry {
-        2 | 3 => 2,
-        4 => 4,
+        2 => 2,
+        // C270 and C90 must be planes of the file for the C270…C90 storage of Isym 3.
+        3 | 4 => 4,
         _ => 1,
     };
     if symmetry > 1 && mc % needs_div != 0 {

@@ -7,7 +7,7 @@ use super::error::{parse_error, PhotometryError};
 use super::ies::{self, IesFile, IesVersion, TiltTable};
 use super::ldt::{self, LdtFile};
 use super::opening::{classify_ies, luminance, LuminousOpening, OpeningShape};
-use super::text::decode;
+use super::text::{decode, lines};
 use super::web::{NativeGrid, PhotometricType, PhotometricWeb, Symmetry, ANGLE_EPS, MAX_INTENSITY_CD};
 
 /// Metres per foot.
@@ -197,24 +197,59 @@ pub fn load_from_text(text: &str, name: &str, opts: &LoadOptions) -> Result<Phot
 }
 
 fn looks_like_ies(text: &str) -> bool {
-    let first = text.lines().next().unwrap_or("").trim_start().to_ascii_uppercase();
+    let ls = lines(text);
+    let first = ls
+        .first()
+        .map_or(String::new(), |l| l.trim_start().to_ascii_uppercase());
     first.starts_with("IES")
-        || text
-            .lines()
+        || ls
+            .iter()
             .take(200)
             .any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
 }
 
-fn ab_step(opts: &LoadOptions, h: &[f64], v: &[f64]) -> f64 {
-    if opts.ab_step_deg > 0.0 {
-        return opts.ab_step_deg;
+/// Largest luminous-opening dimension accepted, metres.
+pub const MAX_OPENING_M: f64 = 1000.0;
+
+/// A warning when a Type C range that runs past 180° stops well short of 360°: the missing planes
+/// are interpolated across the gap back to C0.
+fn wrap_gap_warning(h: &[f64]) -> Option<String> {
+    let (first, last) = (*h.first()?, *h.last()?);
+    if first.abs() > ANGLE_EPS || last <= 180.0 + ANGLE_EPS || last >= 360.0 - ANGLE_EPS {
+        return None;
+    }
+    let max_step = h.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    (360.0 - last > 1.5 * max_step).then(|| {
+        format!(
+            "horizontal angles stop at {last}°: the planes from {last}° to 360° are interpolated towards C0 \
+             across a {}° gap",
+            360.0 - last
+        )
+    })
+}
+
+/// Smallest resampling step accepted for Type A/B files, degrees (0.05° is a 7201 × 3601 grid).
+pub const MIN_AB_STEP_DEG: f64 = 0.05;
+
+fn ab_step(opts: &LoadOptions, h: &[f64], v: &[f64]) -> Result<f64, PhotometryError> {
+    if opts.ab_step_deg != 0.0 {
+        if !(MIN_AB_STEP_DEG..=15.0).contains(&opts.ab_step_deg) {
+            return Err(PhotometryError::InvalidArgument {
+                name: "ab_step_deg",
+                message: format!(
+                    "{} is outside {MIN_AB_STEP_DEG}…15° (0 chooses the step from the file)",
+                    opts.ab_step_deg
+                ),
+            });
+        }
+        return Ok(opts.ab_step_deg);
     }
     let finest = h
         .windows(2)
         .chain(v.windows(2))
         .map(|w| w[1] - w[0])
         .fold(f64::INFINITY, f64::min);
-    finest.clamp(0.25, 1.0)
+    Ok(finest.clamp(0.25, 1.0))
 }
 
 /// Converts a parsed IES file into the model.
@@ -234,11 +269,28 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     };
     let (mut web, symmetry) = match ptype {
         PhotometricType::C => PhotometricWeb::from_type_c(&grid)?,
-        t => PhotometricWeb::from_type_ab(&grid, t, ab_step(opts, &f.horizontal_deg, &f.vertical_deg))?,
+        t => PhotometricWeb::from_type_ab(&grid, t, ab_step(opts, &f.horizontal_deg, &f.vertical_deg)?)?,
     };
     let mut warnings = f.warnings.clone();
     let tilt_applied_deg = apply_tilt(&mut web, f.tilt.as_ref(), opts, name)?;
     let unit = if f.units == 1 { METRES_PER_FOOT } else { 1.0 };
+    for (dim, value) in [("width", f.width), ("length", f.length), ("height", f.height)] {
+        if (value * unit).abs() > MAX_OPENING_M {
+            return Err(parse_error(
+                name,
+                None,
+                format!("luminous opening {dim}"),
+                format!(
+                    "{} m is not a plausible luminous opening (limit {MAX_OPENING_M} m)",
+                    value * unit
+                ),
+            )
+            .into());
+        }
+    }
+    if ptype == PhotometricType::C {
+        warnings.extend(wrap_gap_warning(&f.horizontal_deg));
+    }
     let (opening, warn) = classify_ies(
         f.width * unit,
         f.length * unit,

@@ -422,6 +422,16 @@ impl PhotometricWeb {
         if gamma_deg.len() < 2 || gamma_deg[0] < -ANGLE_EPS || gamma_deg[gamma_deg.len() - 1] > 180.0 + ANGLE_EPS {
             return Err(parse_error("<grid>", None, "γ angles", "need at least 2 within 0…180"));
         }
+        let ng = gamma_deg.len();
+        let last = (c_deg.len() - 1) * ng;
+        if (0..ng).any(|j| (cd[j] - cd[last + j]).abs() > 1e-9 * cd[j].abs().max(cd[last + j].abs())) {
+            return Err(parse_error(
+                "<grid>",
+                None,
+                "C360 plane",
+                "must equal the C0 plane (the same direction)",
+            ));
+        }
         Ok(PhotometricWeb { c_deg, gamma_deg, cd })
     }
 
