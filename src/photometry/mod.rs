@@ -1,5 +1,20 @@
 //! Far-field photometry, pure CPU: IES LM-63 and EULUMDAT readers, the absolute photometric web,
 //! luminous openings and luminance, host-lighting look-up tables, photometric solids and plots.
+//!
+//! ```
+//! use lumiview::photometry::{load_from_text, LoadOptions};
+//!
+//! // A rotationally symmetric LM-63-2002 file, 0.2 m square opening, multiplier 2.
+//! let ies = "IESNA:LM-63-2002\n[TEST] doc\nTILT=NONE\n1 -1 2.0 3 1 1 2 0.2 0.2 0\n1 1 10\n0 45 90\n0\n100 50 0\n";
+//! let ph = load_from_text(ies, "doc.ies", &LoadOptions::default())?;
+//! assert_eq!(ph.intensity(0.0, 0.0), 200.0); // cd, nadir
+//! assert_eq!(ph.intensity(123.0, 22.5), 150.0); // bilinear between the 0° and 45° rows
+//! assert_eq!(ph.intensity(0.0, 120.0), 0.0); // outside the measured 0–90° range
+//! let l = ph.luminance(0.0, 0.0).unwrap(); // cd/m² of the opening seen from below
+//! assert!((l - 200.0 / 0.04).abs() < 1e-9);
+//! assert!(ph.flux_lm() > 0.0);
+//! # Ok::<(), lumiview::photometry::PhotometryError>(())
+//! ```
 
 pub mod error;
 pub mod ies;

@@ -62,6 +62,14 @@ pub struct PhotometricWeb {
 }
 
 /// Direction (unit vector, luminaire frame) of the Type C angles, degrees.
+///
+/// ```
+/// use lumiview::photometry::web::{angles_of, direction};
+/// let d = direction(90.0, 90.0); // C90, horizontal: +Y
+/// assert!((d[1] - 1.0).abs() < 1e-12);
+/// let (c, g) = angles_of([0.0, 0.0, -1.0]); // nadir
+/// assert_eq!((c, g), (0.0, 0.0));
+/// ```
 pub fn direction(c_deg: f64, gamma_deg: f64) -> [f64; 3] {
     let (c, g) = (c_deg.to_radians(), gamma_deg.to_radians());
     [g.sin() * c.cos(), g.sin() * c.sin(), -g.cos()]
