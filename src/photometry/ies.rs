@@ -110,7 +110,8 @@ pub struct IesFile {
     pub height: f64,
     /// Ballast factor.
     pub ballast_factor: f64,
-    /// Before 2019: ballast-lamp photometric factor. In LM-63-2019: the file generation type.
+    /// 1986–1995: ballast-lamp photometric factor; 2002: "future use"; 2019: the file generation
+    /// type.
     pub line11_second: f64,
     /// Input watts.
     pub input_watts: f64,
@@ -130,10 +131,11 @@ impl IesFile {
         self.lumens_per_lamp < 0.0
     }
 
-    /// The factor applied to every candela value: multiplier × ballast factor × (before 2019)
-    /// ballast-lamp photometric factor. The 2019 file-generation type is not a factor.
+    /// The factor applied to every candela value: multiplier × ballast factor × (1986–1995 only)
+    /// ballast-lamp photometric factor. LM-63-2002 renamed that field "future use" and LM-63-2019
+    /// made it the file generation type: neither is a factor.
     pub fn candela_scale(&self) -> f64 {
-        let blp = if self.version >= IesVersion::Lm63_2019 {
+        let blp = if self.version >= IesVersion::Lm63_2002 {
             1.0
         } else {
             self.line11_second
@@ -187,8 +189,14 @@ fn detect_version(first: &str) -> Option<IesVersion> {
         .strip_prefix("IESNA:LM-63-")
         .or_else(|| t.strip_prefix("IES:LM-63-"))
         .or_else(|| t.strip_prefix("IESNA: LM-63-"))?;
-    let year: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
-    Some(match year.parse::<u32>().unwrap_or(0) {
+    let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+    let year = match (digits.len(), digits.parse::<u32>().unwrap_or(0)) {
+        // Two-digit years (`IESNA:LM-63-95`, `-02`) occur in real files.
+        (2, y) if y >= 80 => 1900 + y,
+        (2, y) => 2000 + y,
+        (_, y) => y,
+    };
+    Some(match year {
         0..=1990 => IesVersion::Lm63_1986,
         1991..=1994 => IesVersion::Lm63_1991,
         1995..=2001 => IesVersion::Lm63_1995,
@@ -421,6 +429,8 @@ pub fn parse(
     }
     let second_name = if version >= IesVersion::Lm63_2019 {
         "file generation type"
+    } else if version >= IesVersion::Lm63_2002 {
+        "future use field"
     } else {
         "ballast-lamp photometric factor"
     };
@@ -430,6 +440,13 @@ pub fn parse(
         if file_generation_description(line11_second).is_none() {
             warnings.push(format!(
                 "line {second_line}: unrecognised LM-63-2019 file generation type {line11_second}"
+            ));
+        }
+    } else if version >= IesVersion::Lm63_2002 {
+        if line11_second != 1.0 {
+            warnings.push(format!(
+                "line {second_line}: the LM-63-2002 \"future use\" field holds {line11_second}; not applied \
+                 (it was the ballast-lamp photometric factor before 2002)"
             ));
         }
     } else if line11_second <= 0.0 {

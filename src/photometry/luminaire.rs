@@ -375,12 +375,23 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
             ),
         });
     };
+    // Absolute photometry (negative lamp count, the DIAL/Relux convention) keeps the intensities
+    // in cd/klm and puts the *luminaire* flux in the flux field: the scale is the same, only the
+    // meaning of the flux (no lamp flux, no LOR) changes.
     let absolute = set.count < 0.0;
-    let scale = if absolute {
-        f.conversion_factor
-    } else {
-        f.conversion_factor * set.flux_lm / 1000.0
-    };
+    if set.flux_lm <= 0.0 {
+        return Err(parse_error(
+            name,
+            None,
+            format!("lamp set {} total luminous flux", opts.lamp_set + 1),
+            format!(
+                "{} lm: intensities are in cd/klm and need a positive flux to become candela",
+                set.flux_lm
+            ),
+        )
+        .into());
+    }
+    let scale = f.conversion_factor * set.flux_lm / 1000.0;
     let stored = f.stored_planes();
     let ng = f.ng;
     for w in f.c_deg.windows(2) {
