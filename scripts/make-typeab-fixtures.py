@@ -3,13 +3,14 @@
 asymmetric distribution given in lumiview's luminaire frame, so tests can check the conversion into
 the Type C frame against the formula rather than against our own code.
 
-Frame (docs/photometry.md): nadir -Z, C0 +X (length), C90 +Y (width).
-  Type B: polar axis Y. V = rotation about Y from nadir towards +X, H = latitude towards +Y:
-          d = (cos H sin V, sin H, -cos H cos V)
-  Type A: polar axis X. H = rotation about X from nadir towards +Y, V = latitude towards +X:
-          d = (sin V, cos V sin H, -cos V cos H)
-The distribution: I(d) = 1000 * max(0, -d.z)^2 * (1 + 0.5 d.x + 0.25 d.y) cd (for the laterally
-symmetric file the d.y term is dropped).
+Frame (docs/photometry.md): nadir -Z, C0 +X (length), C90 +Y (width). LM-63-2002 section 3: in
+Types A and B photometric horizontal is H = V = 0 (lumiview: C0, +X), nadir is V = -90, and
+horizontal angles run clockwise seen from above (towards -Y):
+  Type A: polar axis vertical:   d = (cos V cos H, -cos V sin H, sin V)
+  Type B: polar axis along Y:    d = (cos H cos V, -sin H, cos H sin V)
+The distribution, a floodlight aimed along +X:
+  I(d) = 1000 * max(0, d.x)^2 * (1 + 0.5 d.z + 0.25 d.y) cd
+(for the laterally symmetric file the d.y term is dropped). It integrates to 2000*pi/3 lm.
 
 Run from the repository root: python3 scripts/make-typeab-fixtures.py
 """
@@ -19,19 +20,19 @@ OUT = "tests/data/fixtures"
 
 
 def intensity(d, lateral_symmetric=False):
-    down = max(0.0, -d[2])
+    ahead = max(0.0, d[0])
     k = 0.0 if lateral_symmetric else 0.25
-    return 1000.0 * down * down * (1.0 + 0.5 * d[0] + k * d[1])
+    return 1000.0 * ahead * ahead * (1.0 + 0.5 * d[2] + k * d[1])
 
 
 def dir_b(h, v):
     h, v = math.radians(h), math.radians(v)
-    return (math.cos(h) * math.sin(v), math.sin(h), -math.cos(h) * math.cos(v))
+    return (math.cos(h) * math.cos(v), -math.sin(h), math.cos(h) * math.sin(v))
 
 
 def dir_a(h, v):
     h, v = math.radians(h), math.radians(v)
-    return (math.sin(v), math.cos(v) * math.sin(h), -math.cos(v) * math.cos(h))
+    return (math.cos(v) * math.cos(h), -math.cos(v) * math.sin(h), math.sin(v))
 
 
 def write(path, ptype, h_angles, v_angles, dirf, lateral):

@@ -107,6 +107,9 @@ fn errors_name_the_file_or_argument_and_fail() {
     let out = lumiview(&["luminance", "tests/data/photometric-viewer/ies95/point_opening.ies"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("point"));
+    let out = lumiview(&["luminance", ASA, "--c", "0:345:0.01", "--gamma", "0:180:0.01"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("at most 1000000"));
     let out = lumiview(&["luminance", ASA, "--c", "0:10"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--c `0:10`"));
 }

@@ -94,9 +94,9 @@ fn photometric_viewer_ies_intensities_and_multipliers() {
 
 #[test]
 fn photometric_viewer_ies_openings() {
-    // (file, shape, length (X), width (Y), height) in metres. The files are LM-63-1995, written
-    // before the shape table of LM-63-2002; docs/photometry.md gives the reading: the LM-63-2019
-    // sign table, with a zero length/width in pre-2002 files taking the round dimension beside it.
+    // (file, shape, length (X), width (Y), height) in metres. The files are LM-63-1995: their
+    // shape codes follow the pre-2002 reading of docs/photometry.md (one negative horizontal
+    // dimension: ellipse or ellipsoid; a zero length/width takes the round dimension beside it).
     let ft = 0.3048;
     let cases: [(&str, OpeningShape, f64, f64, f64); 19] = [
         ("absolute_photometry.ies", OpeningShape::Ellipse, 0.12, 0.12, 0.0),
@@ -123,14 +123,14 @@ fn photometric_viewer_ies_openings() {
         ),
         (
             "ellipsoid_opening_along_length.ies",
-            OpeningShape::HorizontalCylinderAlongLength,
+            OpeningShape::Ellipsoid,
             0.34,
             0.12,
             0.56,
         ),
         (
             "ellipsoid_opening_along_width.ies",
-            OpeningShape::HorizontalCylinderAlongWidth,
+            OpeningShape::Ellipsoid,
             0.34,
             0.12,
             0.56,
@@ -429,12 +429,32 @@ fn uplight_90_to_180() {
 
 #[test]
 fn type_b_and_type_a_are_converted_not_reinterpreted() {
-    // The fixtures sample I(d) = 1000·max(0, −d.z)²·(1 + 0.5 d.x + 0.25 d.y) on their native
-    // grids (scripts/make-typeab-fixtures.py); the web must reproduce I at Type C angles.
+    // Derived by hand from LM-63-2002 §3, not from lumiview's formulas: in Types A and B,
+    // H = V = 0 is photometric horizontal (lumiview: C0, γ 90°), V = −90° is nadir, and horizontal
+    // angles run clockwise seen from above (H = +90° lies at C270).
+    let a = open("fixtures/type_a_by_hand.ies");
+    assert_close(a.intensity(0.0, 90.0), 1000.0, 1e-9, "A: photometric horizontal");
+    assert_close(a.intensity(270.0, 90.0), 500.0, 1e-9, "A: H +90° is C270");
+    assert_close(a.intensity(90.0, 90.0), 200.0, 1e-9, "A: H −90° is C90");
+    assert_close(a.intensity(0.0, 0.0), 10.0, 1e-9, "A: V −90° is nadir");
+    assert_close(a.intensity(123.0, 180.0), 10.0, 1e-9, "A: V +90° is zenith");
+    let b = open("fixtures/type_b_by_hand.ies");
+    assert_close(b.intensity(0.0, 90.0), 1000.0, 1e-9, "B: photometric horizontal");
+    assert_close(b.intensity(330.0, 90.0), 700.0, 1e-9, "B: H +30° is C330");
+    assert_close(b.intensity(30.0, 90.0), 300.0, 1e-9, "B: H −30° is C30");
+    assert_close(b.intensity(0.0, 0.0), 10.0, 1e-9, "B: V −90° is nadir");
+    assert_eq!(
+        b.intensity(180.0, 90.0),
+        0.0,
+        "B: behind the floodlight is outside V −90…90"
+    );
+    // Analytic floodlights (scripts/make-typeab-fixtures.py) sample
+    // I(d) = 1000·max(0, d.x)²·(1 + 0.5 d.z + 0.25 d.y) on their native grids; the web must
+    // reproduce I at Type C angles.
     let want = |c: f64, g: f64, lateral: bool| {
         let d = direction(c, g);
-        let down = (-d[2]).max(0.0);
-        1000.0 * down * down * (1.0 + 0.5 * d[0] + if lateral { 0.0 } else { 0.25 * d[1] })
+        let ahead = d[0].max(0.0);
+        1000.0 * ahead * ahead * (1.0 + 0.5 * d[2] + if lateral { 0.0 } else { 0.25 * d[1] })
     };
     for (file, lateral) in [
         ("fixtures/type_b.ies", false),
@@ -454,14 +474,14 @@ fn type_b_and_type_a_are_converted_not_reinterpreted() {
         }
         assert!(worst < 0.02, "{file}: worst relative error {worst}");
     }
-    // Read as Type C (the known bug), the same numbers would put the peak somewhere else entirely.
+    // Read as Type C (the known bug), the same numbers would put the beam at nadir.
     let b = open("fixtures/type_b.ies");
     assert!(
-        b.intensity(0.0, 60.0) > b.intensity(180.0, 60.0),
-        "+X side is brighter (1 + 0.5 x)"
+        b.intensity(0.0, 80.0) > 5.0 * b.intensity(0.0, 10.0),
+        "the beam is horizontal"
     );
     assert!(
-        b.intensity(90.0, 60.0) > b.intensity(270.0, 60.0),
+        b.intensity(45.0, 80.0) > b.intensity(315.0, 80.0),
         "+Y side is brighter (1 + 0.25 y)"
     );
 }
@@ -685,4 +705,52 @@ fn implausible_arguments_and_sizes_are_errors() {
         .unwrap()
         .warnings
         .is_empty());
+}
+
+#[test]
+fn review_regressions() {
+    // A negative value is reported on its own line (line 11 here), not the table's first line.
+    let neg = "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 3 2 1 2 0 0 0\n1 1 10\n0 45 90\n0 180\n100 50\n10\n\n9 8\n-7\n";
+    let e = ies_err(neg);
+    assert!(e.starts_with("bad.ies:11:") && e.contains("negative candela -7"), "{e}");
+    // TILT=<device>: refused, not read forever.
+    let dev = std::env::temp_dir().join("lumiview_tilt_dev.ies");
+    std::fs::write(
+        &dev,
+        "IESNA:LM-63-2002\nTILT=/dev/zero\n1 -1 1 2 1 1 2 0 0 0\n1 1 10\n0 90\n0\n1 1\n",
+    )
+    .unwrap();
+    let e = load(&dev, &LoadOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("/dev/zero") && e.contains("regular file"), "{e}");
+    // A Type B table needs at least 2 × 2 angles.
+    let e = ies_err("IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 1 1 2 2 0 0 0\n1 1 10\n0\n0\n5\n");
+    assert!(e.contains("at least 2"), "{e}");
+    // An ellipsoid (pre-2002 code −w, l, −h) shows π·(l/2)·(w/2) from below.
+    let el = open("photometric-viewer/ies95/ellipsoid_opening_along_length.ies");
+    assert_close(
+        el.luminance(0.0, 0.0).unwrap(),
+        2200.0 / (PI * 0.17 * 0.06),
+        1e-9,
+        "ellipsoid",
+    );
+    // An absurd EULUMDAT luminous area is an error, like an absurd IES one.
+    let ldt = std::fs::read_to_string(data(
+        "photometric-viewer/ldt/rectangular_luminaire_rectangular_luminous_opening.ldt",
+    ))
+    .unwrap();
+    let mut lines: Vec<&str> = ldt.lines().collect();
+    lines[15] = "1e300";
+    let e = load_from_text(&lines.join("\n"), "big.ldt", &LoadOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("big.ldt") && e.contains("plausible"), "{e}");
+    // --tilt on a file without a TILT table applies nothing and says so.
+    let ph = open_with(
+        "misc/luxcore_ASA_15M_R2.ies",
+        LoadOptions {
+            tilt_deg: Some(45.0),
+            ..LoadOptions::default()
+        },
+    );
+    assert_eq!(ph.tilt_applied_deg, None);
 }

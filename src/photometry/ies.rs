@@ -461,12 +461,21 @@ pub fn parse(
     let input_watts = tokens.number("input watts")?;
     let vertical_deg = tokens.numbers(n_vert, "vertical angles")?;
     let horizontal_deg = tokens.numbers(n_horiz, "horizontal angles")?;
-    let table_line = tokens.line();
-    let candela = tokens.numbers(n_vert.saturating_mul(n_horiz), "candela values")?;
-    if let Some(pos) = candela.iter().position(|v| *v < 0.0) {
+    let total = n_vert.saturating_mul(n_horiz);
+    let mut candela = Vec::with_capacity(total.min(tokens.remaining()));
+    let mut negative = None;
+    for _ in 0..total {
+        let line = tokens.line();
+        let v = tokens.number("candela values")?;
+        if v < 0.0 && negative.is_none() {
+            negative = Some((candela.len(), line));
+        }
+        candela.push(v);
+    }
+    if let Some((pos, value_line)) = negative {
         return Err(parse_error(
             file,
-            Some(table_line),
+            Some(value_line),
             "candela values",
             format!(
                 "negative candela {} at horizontal {}°, vertical {}°",

@@ -304,12 +304,12 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
         warnings,
     };
     let planes = lf.stored_planes().len();
-    let first_table_line = tokens.line();
     // Mc and Ng come from the file: reserve no more than the numbers left (a huge table declared
     // in a short file fails with "truncated" instead of allocating gigabytes first).
     let table_len = planes.saturating_mul(ng);
     let mut intensities = Vec::with_capacity(table_len.min(tokens.remaining()));
     for _ in 0..table_len {
+        let value_line = tokens.line();
         let v = tokens.number_comma_decimal("luminous intensities").map_err(|mut e| {
             e.message = format!(
                 "{} (expected {planes} planes × {ng} values for symmetry {symmetry})",
@@ -320,7 +320,7 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
         if v < 0.0 {
             return Err(parse_error(
                 file,
-                Some(first_table_line),
+                Some(value_line),
                 "luminous intensities",
                 format!("negative intensity {v}"),
             ));

@@ -146,9 +146,20 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Photometry, PhotometryErr
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let load_tilt = move |tilt_name: &str| -> Result<String, PhotometryError> {
         let p = dir.join(tilt_name);
-        std::fs::read(&p)
-            .map(|b| decode(&b))
-            .map_err(|source| PhotometryError::Io { path: p, source })
+        let io = |source| PhotometryError::Io {
+            path: p.clone(),
+            source,
+        };
+        // Only a regular file of plausible size: a device or FIFO named in a file must not hang
+        // or exhaust memory.
+        let meta = std::fs::metadata(&p).map_err(io)?;
+        if !meta.is_file() || meta.len() > MAX_TILT_FILE_BYTES {
+            return Err(io(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                format!("not a regular file of at most {MAX_TILT_FILE_BYTES} bytes"),
+            )));
+        }
+        std::fs::read(&p).map(|b| decode(&b)).map_err(io)
     };
     let ext = path
         .extension()
@@ -207,6 +218,9 @@ fn looks_like_ies(text: &str) -> bool {
             .take(200)
             .any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
 }
+
+/// Largest TILT file read, bytes.
+pub const MAX_TILT_FILE_BYTES: u64 = 1 << 20;
 
 /// Largest luminous-opening dimension accepted, metres.
 pub const MAX_OPENING_M: f64 = 1000.0;
@@ -359,8 +373,10 @@ fn apply_tilt(
             .into());
         }
         web.scale(k);
+        return Ok(Some(angle));
     }
-    Ok(Some(angle))
+    // TILT=NONE: the lamp output does not depend on tilt, so nothing is applied.
+    Ok(None)
 }
 
 /// Converts a parsed EULUMDAT file into the model.
@@ -482,6 +498,20 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
     };
     let mut warnings = f.warnings.clone();
     let m = |mm: f64| mm / 1000.0;
+    let sizes = f
+        .luminaire_mm
+        .iter()
+        .chain(&f.luminous_area_mm)
+        .chain(&f.luminous_heights_mm);
+    if let Some(big) = sizes.copied().find(|mm| m(*mm) > MAX_OPENING_M) {
+        return Err(parse_error(
+            name,
+            None,
+            "luminaire / luminous area dimensions",
+            format!("{big} mm is not a plausible size (limit {MAX_OPENING_M} m)"),
+        )
+        .into());
+    }
     let [la, ba] = f.luminous_area_mm;
     let heights = f.luminous_heights_mm.map(m);
     let has_sides = heights.iter().any(|h| *h > 0.0);

@@ -156,11 +156,23 @@ pub fn luminance(cd: f64, area_m2: f64) -> Option<f64> {
 }
 
 /// Classifies IES luminous dimensions (width, length, height, already in metres) into a shape,
-/// following the LM-63-2019 Table 1 sign conventions. `legacy` selects the pre-2002 reading in which
-/// a zero length or width takes the value of the negative (round) dimension next to it. Returns the
-/// opening and a warning for sign patterns outside the table.
+/// following the LM-63-2019 Table 1 sign conventions. `legacy` selects the pre-2002 reading: one
+/// negative horizontal dimension with the other positive is an ellipse (flat, or with luminous
+/// sides when the height is positive) or, with a negative height, an ellipsoid; and a zero length
+/// or width takes the value of the negative (round) dimension next to it. Returns the opening and
+/// a warning for sign patterns outside the table.
 pub fn classify_ies(w: f64, l: f64, h: f64, legacy: bool) -> (LuminousOpening, Option<String>) {
     let (mut w, mut l, h) = (w, l, h);
+    if legacy && ((w < 0.0 && l > 0.0) || (w > 0.0 && l < 0.0)) {
+        let shape = if h < 0.0 {
+            OpeningShape::Ellipsoid
+        } else if h > 0.0 {
+            OpeningShape::VerticalCylinder
+        } else {
+            OpeningShape::Ellipse
+        };
+        return (LuminousOpening::new(shape, l.abs(), w.abs(), h.abs()), None);
+    }
     if legacy {
         if l == 0.0 && w < 0.0 {
             l = w;
@@ -266,6 +278,14 @@ mod tests {
         assert_eq!(s(-0.1, 0.0, 0.0, true), OpeningShape::Ellipse);
         assert_eq!(s(0.0, 0.12, -0.34, true), OpeningShape::HorizontalCylinderAlongLength);
         let (o, warn) = classify_ies(-0.12, 0.34, 0.56, true);
+        assert_eq!(o.shape, OpeningShape::VerticalCylinder);
+        assert!(warn.is_none());
+        assert_eq!(s(-0.12, 0.34, -0.56, true), OpeningShape::Ellipsoid);
+        assert_eq!(
+            s(-0.12, 0.34, -0.56, false),
+            OpeningShape::HorizontalCylinderAlongLength
+        );
+        let (o, warn) = classify_ies(-0.12, 0.34, 0.56, false);
         assert_eq!(o.shape, OpeningShape::VerticalCylinder);
         assert!(warn.is_some());
     }

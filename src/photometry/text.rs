@@ -168,8 +168,16 @@ pub fn parse_number(file: &str, tok: Token<'_>, field: &str, comma_decimal: bool
             file,
             Some(tok.line),
             field,
-            format!("expected a finite number, found `{}`", tok.text),
+            format!("expected a finite number, found `{}`", shorten(tok.text)),
         )),
+    }
+}
+
+/// A token as quoted in an error: at most 40 characters.
+fn shorten(t: &str) -> String {
+    match t.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &t[..i]),
+        None => t.to_string(),
     }
 }
 

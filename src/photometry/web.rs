@@ -10,6 +10,9 @@ use super::error::{parse_error, ParseError};
 /// Tolerance for angle comparisons, degrees.
 pub(crate) const ANGLE_EPS: f64 = 1e-6;
 
+/// Angular distance from a Type A/B pole within which the rotation angle is meaningless, degrees.
+const POLE_EPS_DEG: f64 = 1e-6;
+
 /// The largest intensity in cd a web accepts. No luminaire comes near it (a searchlight reaches
 /// about 1e9 cd); anything above is a wrong multiplier or a corrupt file, and the bound keeps flux
 /// integrals, luminances (≤ 1e27 cd/m² over the smallest area divided by) and f32 textures finite.
@@ -18,11 +21,12 @@ pub const MAX_INTENSITY_CD: f64 = 1e15;
 /// The photometric coordinate system a file was measured in (IES field "photometric type").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum PhotometricType {
-    /// Type A (automotive): polar axis along the luminaire's length (X); horizontal angle H is the
-    /// rotation about that axis, vertical angle V the latitude towards +X.
+    /// Type A (automotive): polar axis vertical; H = V = 0 is photometric horizontal (C0,
+    /// γ 90°), V = −90° nadir, H clockwise from above. See [`type_a_direction`].
     A,
-    /// Type B (floodlights): polar axis along the luminaire's width (Y); vertical angle V is the
-    /// rotation about that axis, horizontal angle H the latitude towards +Y.
+    /// Type B (floodlights): polar axis horizontal along Y; V rotates about it (−90° nadir, 0
+    /// horizontal along C0), H is the lateral angle, clockwise from above. See
+    /// [`type_b_direction`].
     B,
     /// Type C: polar axis vertical; C planes about it, γ from nadir. lumiview's own frame.
     C,
@@ -92,32 +96,38 @@ pub fn angles_of(d: [f64; 3]) -> (f64, f64) {
     (c, gamma)
 }
 
-/// Native Type A angles (H, V) in degrees of a direction: H = rotation about X (from nadir towards
-/// +Y), V = latitude towards +X.
+// Types A and B (LM-63-2002 §3): the luminaire is measured aimed along photometric horizontal,
+// H = V = 0, which lumiview puts at C0, γ = 90° (+X); V = −90° is nadir (−Z); horizontal angles run
+// clockwise seen from above (towards −Y), where Type C runs counter-clockwise.
+
+/// Native Type A angles (H, V) in degrees of a direction. Type A: polar axis vertical (Z); H is the
+/// rotation about it, clockwise from +X seen from above; V the elevation (latitude) from the
+/// horizontal plane, −90° at nadir. Equivalent to Type C with γ = V + 90°, C = −H.
 pub fn type_a_angles(d: [f64; 3]) -> (f64, f64) {
-    let v = d[0].clamp(-1.0, 1.0).asin().to_degrees();
-    let h = d[1].atan2(-d[2]).to_degrees();
+    let v = d[2].clamp(-1.0, 1.0).asin().to_degrees();
+    let h = (-d[1]).atan2(d[0]).to_degrees();
     (h, v)
 }
 
-/// Native Type B angles (H, V) in degrees of a direction: V = rotation about Y (from nadir towards
-/// +X), H = latitude towards +Y.
+/// Native Type B angles (H, V) in degrees of a direction. Type B: polar axis horizontal along Y
+/// (the luminaire's lateral axis); V is the rotation about it, from +X (V = 0) towards +Z (V = 90°,
+/// nadir at −90°); H the latitude from the XZ plane, positive towards −Y (clockwise from above).
 pub fn type_b_angles(d: [f64; 3]) -> (f64, f64) {
-    let h = d[1].clamp(-1.0, 1.0).asin().to_degrees();
-    let v = d[0].atan2(-d[2]).to_degrees();
+    let h = (-d[1]).clamp(-1.0, 1.0).asin().to_degrees();
+    let v = d[2].atan2(d[0]).to_degrees();
     (h, v)
 }
 
-/// Direction of native Type A angles (degrees).
+/// Direction of native Type A angles (degrees): `(cos V cos H, −cos V sin H, sin V)`.
 pub fn type_a_direction(h_deg: f64, v_deg: f64) -> [f64; 3] {
     let (h, v) = (h_deg.to_radians(), v_deg.to_radians());
-    [v.sin(), v.cos() * h.sin(), -v.cos() * h.cos()]
+    [v.cos() * h.cos(), -v.cos() * h.sin(), v.sin()]
 }
 
-/// Direction of native Type B angles (degrees).
+/// Direction of native Type B angles (degrees): `(cos H cos V, −sin H, cos H sin V)`.
 pub fn type_b_direction(h_deg: f64, v_deg: f64) -> [f64; 3] {
     let (h, v) = (h_deg.to_radians(), v_deg.to_radians());
-    [h.cos() * v.sin(), h.sin(), -h.cos() * v.cos()]
+    [h.cos() * v.cos(), -h.sin(), h.cos() * v.sin()]
 }
 
 /// A file's table as stored: `values[ih * v.len() + iv]` for horizontal angle `h[ih]` and
@@ -343,6 +353,14 @@ impl PhotometricWeb {
         check_values(g)?;
         check_increasing(g.file, "vertical angles", g.v)?;
         check_increasing(g.file, "horizontal angles", g.h)?;
+        if g.h.len() < 2 || g.v.len() < 2 {
+            return Err(parse_error(
+                g.file,
+                None,
+                "angles",
+                format!("Type {kind:?} needs at least 2 horizontal and 2 vertical angles"),
+            ));
+        }
         let (h0, h1) = (g.h[0], g.h[g.h.len() - 1]);
         let (v0, v1) = (g.v[0], g.v[g.v.len() - 1]);
         // The latitude angle is limited to ±90°, the rotation angle to ±180°.
@@ -405,6 +423,13 @@ impl PhotometricWeb {
                 }
                 if v_sym {
                     v = v.abs();
+                }
+                // At a pole of the native system (latitude ±90°) every rotation angle names the
+                // same direction: take one the file has.
+                match kind {
+                    PhotometricType::A if v.abs() > 90.0 - POLE_EPS_DEG => h = h.clamp(h0, h1),
+                    PhotometricType::B if h.abs() > 90.0 - POLE_EPS_DEG => v = v.clamp(v0, v1),
+                    _ => {}
                 }
                 cd.push(bilinear_native(g, h, v));
             }
@@ -683,11 +708,15 @@ mod tests {
     #[test]
     fn type_b_axes() {
         let d = type_b_direction(0.0, 0.0);
-        assert!((d[2] + 1.0).abs() < 1e-12);
-        let d = type_b_direction(0.0, 90.0);
-        assert!((d[0] - 1.0).abs() < 1e-12);
+        assert!((d[0] - 1.0).abs() < 1e-12, "photometric horizontal is C0");
+        let d = type_b_direction(0.0, -90.0);
+        assert!((d[2] + 1.0).abs() < 1e-12, "V = −90° is nadir");
         let d = type_b_direction(90.0, 0.0);
-        assert!((d[1] - 1.0).abs() < 1e-12);
+        assert!((d[1] + 1.0).abs() < 1e-12, "H runs clockwise from above: +90° is C270");
+        let d = type_a_direction(90.0, 0.0);
+        assert!((d[1] + 1.0).abs() < 1e-12);
+        let d = type_a_direction(0.0, -90.0);
+        assert!((d[2] + 1.0).abs() < 1e-12);
         let (h, v) = type_b_angles(type_b_direction(30.0, -50.0));
         assert!((h - 30.0).abs() < 1e-9 && (v + 50.0).abs() < 1e-9);
         let (h, v) = type_a_angles(type_a_direction(-70.0, 20.0));

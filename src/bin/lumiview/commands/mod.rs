@@ -279,6 +279,15 @@ pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadAr
     if gs.iter().any(|g| !(0.0..=180.0).contains(g)) {
         return Err(format!("--gamma `{gamma}`: angles must lie within 0…180°").into());
     }
+    const MAX_CELLS: usize = 1_000_000;
+    if cs.len() * gs.len() > MAX_CELLS {
+        return Err(format!(
+            "--c `{c}` × --gamma `{gamma}` asks for {} × {} values; at most {MAX_CELLS} per table",
+            cs.len(),
+            gs.len()
+        )
+        .into());
+    }
     let p = load(file, args)?;
     if p.opening.is_point() {
         return Err(format!(
