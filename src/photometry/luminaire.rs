@@ -484,11 +484,10 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         v: &f.gamma_deg,
         values: &values,
     };
-    let (web, _) = if planes_h.len() > 1 && planes_h[planes_h.len() - 1] <= 180.0 + ANGLE_EPS {
+    if planes_h.len() > 1 && planes_h[planes_h.len() - 1] <= 180.0 + ANGLE_EPS {
         return Err(parse_error(name, None, "C angles", "a full set of C planes must extend beyond C180").into());
-    } else {
-        PhotometricWeb::from_type_c(&grid)?
-    };
+    }
+    let (web, _) = PhotometricWeb::from_type_c(&grid)?;
     let symmetry = match f.symmetry {
         0 => Symmetry::None,
         1 => Symmetry::Rotational,

@@ -138,12 +138,6 @@ impl LuminousOpening {
                 (0..8).all(|j| self.projected_area(j as f64 * 45.0, g) <= 0.0)
             })
     }
-
-    /// The largest extent in metres (for drawing and for bounds).
-    pub fn max_extent_m(&self) -> f64 {
-        let s = self.side_heights_m.iter().copied().fold(0.0, f64::max);
-        self.length_m.max(self.width_m).max(self.height_m).max(s)
-    }
 }
 
 /// Smallest projected area (m²) treated as non-zero when dividing intensity by it.

@@ -3,8 +3,6 @@
 //! +X seen from above. Built from a file's native grid by symmetry expansion (Type C) or by
 //! resampling (Types A and B); bilinear between grid nodes, zero outside the measured γ range.
 
-use std::f64::consts::PI;
-
 use super::error::{parse_error, ParseError};
 
 /// Tolerance for angle comparisons, degrees.
@@ -625,14 +623,10 @@ fn bilinear_native(g: &NativeGrid<'_>, h: f64, v: f64) -> f64 {
     a * (1.0 - th) + b * th
 }
 
-/// Solid angle in sr of the γ band [a, b] (degrees) over the whole C circle.
-pub fn band_solid_angle(a_deg: f64, b_deg: f64) -> f64 {
-    2.0 * PI * (a_deg.to_radians().cos() - b_deg.to_radians().cos())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     fn grid<'a>(h: &'a [f64], v: &'a [f64], values: &'a [f64]) -> NativeGrid<'a> {
         NativeGrid {
