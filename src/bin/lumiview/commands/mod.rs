@@ -1,7 +1,9 @@
 //! The subcommands. Each returns an error whose text names the file or argument at fault.
 
 mod lut;
+mod pack;
 mod plot;
+mod rays;
 mod solid;
 
 use std::path::Path;
@@ -14,6 +16,30 @@ pub use plot::{plot, PlotArgs};
 pub use solid::{solid, SolidArgs};
 
 use crate::LoadArgs;
+
+/// What kind of input file `info` was given.
+enum FileKind {
+    /// IES or EULUMDAT.
+    Photometry,
+    /// IES TM-25 ray file.
+    RayFile,
+    /// lumiview `.lvpack` near-field store.
+    Pack,
+}
+
+/// Detects the kind of a file by its magic bytes (TM-25: "TM25"; .lvpack: "LVPACK"), else photometry.
+fn detect_kind(file: &Path) -> FileKind {
+    use std::io::Read as _;
+    let mut magic = [0u8; 8];
+    let n = std::fs::File::open(file).and_then(|mut f| f.read(&mut magic)).unwrap_or(0);
+    if n >= 4 && &magic[..4] == b"TM25" {
+        FileKind::RayFile
+    } else if n >= 6 && &magic[..6] == b"LVPACK" {
+        FileKind::Pack
+    } else {
+        FileKind::Photometry
+    }
+}
 
 /// Result of a subcommand.
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
@@ -108,6 +134,11 @@ fn fmt_num(v: f64) -> String {
 
 /// `lumiview info`.
 pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
+    match detect_kind(file) {
+        FileKind::Photometry => {}
+        FileKind::RayFile => return rays::info_rayfile(file, as_json),
+        FileKind::Pack => return pack::info_pack(file, as_json),
+    }
     let mut out = String::new();
     let p = load(file, args)?;
     let (max_cd, max_c, max_g) = p.web.max_intensity();
