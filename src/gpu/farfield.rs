@@ -1,0 +1,588 @@
+//! The far-field appearance pass: every instance of an IES/EULUMDAT luminaire drawn as its luminous
+//! opening with L(C, γ) = I / A_proj looked up per fragment for the direction from which the eye
+//! sees it; optional overlays (photometric-solid wireframe, housing box).
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec4};
+
+use super::camera::HostCamera;
+use super::context::GpuContext;
+use super::meshes;
+use super::target::{ColorFormat, DepthFormat, RenderTarget};
+use super::GpuError;
+use crate::photometry::Photometry;
+
+/// Width of the luminance table: C from 0 to 360° in 0.5° steps, node-aligned.
+pub const L_TABLE_WIDTH: u32 = 721;
+/// Height of the luminance table: γ from 0 to 180° in 0.5° steps, node-aligned.
+pub const L_TABLE_HEIGHT: u32 = 361;
+
+/// The C and γ angles (degrees) of luminance-table texel (i, j).
+pub fn l_table_angles(i: u32, j: u32) -> (f64, f64) {
+    (
+        360.0 * i as f64 / (L_TABLE_WIDTH - 1) as f64,
+        180.0 * j as f64 / (L_TABLE_HEIGHT - 1) as f64,
+    )
+}
+
+/// The luminance table of a luminaire (cd/m², row-major over γ then C); 0 where L is undefined
+/// (zero projected area).
+pub fn luminance_table(p: &Photometry) -> Vec<f32> {
+    let mut out = Vec::with_capacity((L_TABLE_WIDTH * L_TABLE_HEIGHT) as usize);
+    for j in 0..L_TABLE_HEIGHT {
+        for i in 0..L_TABLE_WIDTH {
+            let (c, g) = l_table_angles(i, j);
+            let l = p.luminance(c, g).unwrap_or(0.0);
+            out.push(if l.is_finite() {
+                l.min(f32::MAX as f64) as f32
+            } else {
+                0.0
+            });
+        }
+    }
+    out
+}
+
+/// Overlays drawn on top of the appearance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Overlays {
+    /// The photometric-solid wireframe.
+    pub solid: bool,
+    /// The housing box (where the file gives luminaire dimensions).
+    pub housing: bool,
+}
+
+/// What the colour output holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputMode {
+    /// Linear luminance in cd/m² (float targets only).
+    Luminance,
+    /// Reinhard with exposure: x = L · exposure, display value x / (1 + x).
+    ToneMapped,
+}
+
+/// Per-frame render options.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderOptions {
+    /// Output mode (RGBA8 sRGB targets require `ToneMapped`).
+    pub output: OutputMode,
+    /// Exposure in m²/cd for tone mapping (x = L · exposure); also scales overlay colours in
+    /// luminance mode (an overlay of display value v is written as v / exposure cd/m²).
+    pub exposure: f32,
+    /// Overlays.
+    pub overlays: Overlays,
+    /// Radius of the photometric solid at the maximum intensity, metres.
+    pub solid_radius_m: f32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            output: OutputMode::Luminance,
+            exposure: 1e-3,
+            overlays: Overlays::default(),
+            solid_radius_m: 0.5,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// Checks the options against a target.
+    pub fn validate(&self, target: &RenderTarget) -> Result<(), GpuError> {
+        if !self.exposure.is_finite() || self.exposure <= 0.0 {
+            return Err(GpuError::invalid(
+                "exposure",
+                format!("{} must be finite and > 0", self.exposure),
+            ));
+        }
+        if !self.solid_radius_m.is_finite() || self.solid_radius_m <= 0.0 {
+            return Err(GpuError::invalid(
+                "solid_radius_m",
+                format!("{} must be finite and > 0", self.solid_radius_m),
+            ));
+        }
+        if self.output == OutputMode::Luminance && target.desc.color == ColorFormat::Rgba8Srgb {
+            return Err(GpuError::invalid(
+                "output",
+                "an RGBA8 sRGB target cannot hold luminance in cd/m²: use the tone-mapped output or a float target",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A luminaire's far-field data on the GPU; instances share it through an `Arc`.
+#[derive(Debug)]
+pub struct FarfieldLuminaire {
+    /// The photometry it was made from.
+    pub photometry: Arc<Photometry>,
+    opening: Option<(wgpu::Buffer, u32)>,
+    solid: Option<(wgpu::Buffer, u32)>,
+    housing: Option<(wgpu::Buffer, u32)>,
+    table_bind: wgpu::BindGroup,
+}
+
+fn vertex_buffer(ctx: &GpuContext, label: &str, v: &[[f32; 3]]) -> Option<(wgpu::Buffer, u32)> {
+    if v.is_empty() {
+        return None;
+    }
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: std::mem::size_of_val(v) as u64,
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(v));
+    Some((buf, v.len() as u32))
+}
+
+/// Uniform block of one draw (matches `Instance` in shaders/farfield.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct InstanceUniform {
+    /// Luminaire frame → wgpu clip space.
+    pub clip_from_local: [[f32; 4]; 4],
+    /// Eye in the luminaire frame (w = 1 point, w = 0 direction).
+    pub eye_local: [f32; 4],
+    /// exposure, mode, line luminance scale, unused.
+    pub params: [f32; 4],
+    /// Line colour.
+    pub line_color: [f32; 4],
+}
+
+/// Size of one uniform slot (dynamic offsets must be 256-byte aligned).
+const SLOT: u64 = 256;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PipelineKey {
+    color: ColorFormat,
+    depth_copy: bool,
+    reversed_z: bool,
+    lines: bool,
+}
+
+/// Pipelines and shared layouts of the far-field pass.
+#[derive(Debug)]
+pub struct FarfieldPass {
+    module: wgpu::ShaderModule,
+    instance_layout: wgpu::BindGroupLayout,
+    table_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    uniforms: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+}
+
+/// The far-field shader source.
+pub const SHADER: &str = include_str!("../../shaders/farfield.wgsl");
+
+impl FarfieldPass {
+    /// Compiles the shader and creates the layouts.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        ctx.scoped("creating the far-field pass", || {
+            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("farfield.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+            });
+            let instance_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("far-field instance"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<InstanceUniform>() as u64),
+                    },
+                    count: None,
+                }],
+            });
+            let table_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("far-field luminance table"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                }],
+            });
+            let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("far-field"),
+                bind_group_layouts: &[Some(&instance_layout), Some(&table_layout)],
+                immediate_size: 0,
+            });
+            Ok(FarfieldPass {
+                module,
+                instance_layout,
+                table_layout,
+                pipeline_layout,
+                pipelines: HashMap::new(),
+                uniforms: None,
+            })
+        })
+    }
+
+    /// Uploads a luminaire: its luminance table, opening triangles, solid wireframe (unit radius) and
+    /// housing box.
+    pub fn upload(&self, ctx: &GpuContext, photometry: Arc<Photometry>) -> Result<FarfieldLuminaire, GpuError> {
+        ctx.scoped("uploading a luminaire", || {
+            let table = luminance_table(&photometry);
+            let size = wgpu::Extent3d {
+                width: L_TABLE_WIDTH,
+                height: L_TABLE_HEIGHT,
+                depth_or_array_layers: 1,
+            };
+            let tex = ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("luminance table (cd/m²)"),
+                size,
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::R32Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+                view_formats: &[],
+            });
+            ctx.queue.write_texture(
+                tex.as_image_copy(),
+                bytemuck::cast_slice(&table),
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(L_TABLE_WIDTH * 4),
+                    rows_per_image: None,
+                },
+                size,
+            );
+            let view = tex.create_view(&wgpu::TextureViewDescriptor::default());
+            let table_bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("luminance table"),
+                layout: &self.table_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&view),
+                }],
+            });
+            let opening = vertex_buffer(
+                ctx,
+                "opening",
+                &meshes::opening_triangles(&photometry.opening).positions,
+            );
+            let solid = vertex_buffer(ctx, "photometric solid", &meshes::solid_lines(&photometry.web, 1.0));
+            let housing = photometry
+                .luminaire_size_m
+                .filter(|s| s.iter().all(|v| v.is_finite() && *v > 0.0))
+                .and_then(|s| vertex_buffer(ctx, "housing", &meshes::housing_lines(s)));
+            Ok(FarfieldLuminaire {
+                photometry,
+                opening,
+                solid,
+                housing,
+                table_bind,
+            })
+        })
+    }
+
+    fn pipeline(&mut self, ctx: &GpuContext, key: PipelineKey) -> Result<wgpu::RenderPipeline, GpuError> {
+        if let Some(p) = self.pipelines.get(&key) {
+            return Ok(p.clone());
+        }
+        let p = ctx.scoped("creating a far-field pipeline", || {
+            let color_targets = [
+                Some(wgpu::ColorTargetState {
+                    format: key.color.wgpu(),
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+                key.depth_copy.then_some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::R32Float,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+            ];
+            let targets: &[Option<wgpu::ColorTargetState>] = if key.depth_copy {
+                &color_targets
+            } else {
+                &color_targets[..1]
+            };
+            Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(if key.lines {
+                    "far-field lines"
+                } else {
+                    "far-field opening"
+                }),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: if key.lines {
+                        wgpu::PrimitiveTopology::LineList
+                    } else {
+                        wgpu::PrimitiveTopology::TriangleList
+                    },
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(if key.reversed_z {
+                        wgpu::CompareFunction::Greater
+                    } else {
+                        wgpu::CompareFunction::Less
+                    }),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some(if key.lines { "fs_line" } else { "fs_opening" }),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            }))
+        })?;
+        self.pipelines.insert(key, p.clone());
+        Ok(p)
+    }
+
+    /// Renders `instances` (luminaire, model matrix: luminaire frame → world) into `target` seen by
+    /// `camera`, then releases the exported images to the host and waits for the GPU to finish.
+    pub fn render(
+        &mut self,
+        ctx: &GpuContext,
+        target: &mut RenderTarget,
+        camera: &HostCamera,
+        options: &RenderOptions,
+        instances: &[(&FarfieldLuminaire, Mat4)],
+    ) -> Result<(), GpuError> {
+        camera.validate()?;
+        options.validate(target)?;
+        ctx.check()?;
+        for (_, m) in instances {
+            if !m.is_finite() || m.determinant().abs() < 1e-30 {
+                return Err(GpuError::invalid(
+                    "model matrix",
+                    "an instance's model matrix is not finite or is singular",
+                ));
+            }
+        }
+        let mode = if options.output == OutputMode::ToneMapped {
+            1.0
+        } else {
+            0.0
+        };
+        let line_scale = 1.0 / options.exposure;
+        let clip_from_world = camera.clip_from_world();
+        // Up to three draws per instance: opening, solid, housing.
+        let mut slots: Vec<InstanceUniform> = Vec::with_capacity(instances.len() * 3);
+        let mut draws: Vec<(usize, &wgpu::BindGroup, &wgpu::Buffer, u32, bool)> = Vec::new();
+        for (lum, model) in instances {
+            let eye = camera.eye_in(*model);
+            let base = InstanceUniform {
+                clip_from_local: (clip_from_world * *model).to_cols_array_2d(),
+                eye_local: eye.to_array(),
+                params: [options.exposure, mode, line_scale, 0.0],
+                line_color: [0.0; 4],
+            };
+            if let Some((buf, n)) = &lum.opening {
+                draws.push((slots.len(), &lum.table_bind, buf, *n, false));
+                slots.push(base);
+            }
+            if options.overlays.solid {
+                if let Some((buf, n)) = &lum.solid {
+                    let scaled = *model * Mat4::from_scale(glam::Vec3::splat(options.solid_radius_m));
+                    let mut u = base;
+                    u.clip_from_local = (clip_from_world * scaled).to_cols_array_2d();
+                    u.line_color = [1.0, 0.55, 0.1, 1.0];
+                    draws.push((slots.len(), &lum.table_bind, buf, *n, true));
+                    slots.push(u);
+                }
+            }
+            if options.overlays.housing {
+                if let Some((buf, n)) = &lum.housing {
+                    let mut u = base;
+                    u.line_color = [0.2, 0.6, 1.0, 1.0];
+                    draws.push((slots.len(), &lum.table_bind, buf, *n, true));
+                    slots.push(u);
+                }
+            }
+        }
+        let needed = (slots.len().max(1) as u64) * SLOT;
+        if self.uniforms.as_ref().is_none_or(|(_, cap, _)| *cap < needed) {
+            let cap = needed.next_power_of_two();
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("far-field instances"),
+                size: cap,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("far-field instances"),
+                layout: &self.instance_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &buf,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<InstanceUniform>() as u64),
+                    }),
+                }],
+            });
+            self.uniforms = Some((buf, cap, bind));
+        }
+        let mut bytes = vec![0u8; slots.len() * SLOT as usize];
+        for (k, s) in slots.iter().enumerate() {
+            let b = bytemuck::bytes_of(s);
+            bytes[k * SLOT as usize..k * SLOT as usize + b.len()].copy_from_slice(b);
+        }
+        let key = |lines| PipelineKey {
+            color: target.desc.color,
+            depth_copy: target.desc.depth == DepthFormat::R32Float,
+            reversed_z: camera.reversed_z,
+            lines,
+        };
+        let tri_pipeline = self.pipeline(ctx, key(false))?;
+        let line_pipeline = self.pipeline(ctx, key(true))?;
+        let Some((ubuf, _, ubind)) = self.uniforms.as_ref() else {
+            return Err(GpuError::invalid("uniforms", "uniform buffer missing"));
+        };
+        if !bytes.is_empty() {
+            ctx.queue.write_buffer(ubuf, 0, &bytes);
+        }
+        let far = if camera.reversed_z { 0.0 } else { 1.0 };
+        let color_view = target
+            .color
+            .texture()
+            .create_view(&wgpu::TextureViewDescriptor::default());
+        let depth_copy_view = target
+            .depth_copy
+            .as_ref()
+            .map(|d| d.texture().create_view(&wgpu::TextureViewDescriptor::default()));
+        let depth_view = target
+            .depth
+            .texture()
+            .create_view(&wgpu::TextureViewDescriptor::default());
+        let family = ctx.caps.queue_family;
+        let mut cbs: Vec<wgpu::CommandBuffer> = Vec::new();
+        for e in target.exportables_mut() {
+            cbs.extend(e.encode_acquire(&ctx.device, family));
+        }
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("far-field frame"),
+        });
+        {
+            let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
+                view: &color_view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })];
+            if let Some(v) = &depth_copy_view {
+                color_attachments.push(Some(wgpu::RenderPassColorAttachment {
+                    view: v,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color {
+                            r: far,
+                            g: 0.0,
+                            b: 0.0,
+                            a: 1.0,
+                        }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                }));
+            }
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("far-field appearance"),
+                color_attachments: &color_attachments,
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(far as f32),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            for (slot, table, vb, count, lines) in &draws {
+                pass.set_pipeline(if *lines { &line_pipeline } else { &tri_pipeline });
+                pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
+                pass.set_bind_group(1, *table, &[]);
+                pass.set_vertex_buffer(0, vb.slice(..));
+                pass.draw(0..*count, 0..1);
+            }
+        }
+        cbs.push(enc.finish());
+        for e in target.exportables_mut() {
+            cbs.push(e.encode_release(&ctx.device, family));
+        }
+        ctx.scoped("rendering a frame", || {
+            ctx.queue.submit(cbs);
+            Ok(())
+        })?;
+        ctx.wait_idle()?;
+        for e in target.exportables_mut() {
+            e.released = true;
+        }
+        target.frames += 1;
+        Ok(())
+    }
+}
+
+/// Luminance (cd/m²) the far-field pass shows for a direction `d` (luminaire frame, towards the eye),
+/// computed on the CPU the same way as the shader (bilinear between table nodes): for tests and hosts.
+pub fn shader_luminance(table: &[f32], d: [f64; 3]) -> f64 {
+    let gamma = (-d[2]).clamp(-1.0, 1.0).acos();
+    let mut c = d[1].atan2(d[0]);
+    if c < 0.0 {
+        c += std::f64::consts::TAU;
+    }
+    let (w, h) = (L_TABLE_WIDTH as usize, L_TABLE_HEIGHT as usize);
+    let u = c / std::f64::consts::TAU * (w - 1) as f64;
+    let v = gamma / std::f64::consts::PI * (h - 1) as f64;
+    let i0 = (u.floor() as usize).min(w - 1);
+    let j0 = (v.floor() as usize).min(h - 1);
+    let (i1, j1) = ((i0 + 1).min(w - 1), (j0 + 1).min(h - 1));
+    let (fu, fv) = ((u - i0 as f64).clamp(0.0, 1.0), (v - j0 as f64).clamp(0.0, 1.0));
+    let t = |i: usize, j: usize| table.get(j * w + i).copied().unwrap_or(0.0) as f64;
+    let top = t(i0, j0) * (1.0 - fu) + t(i1, j0) * fu;
+    let bottom = t(i0, j1) * (1.0 - fu) + t(i1, j1) * fu;
+    top * (1.0 - fv) + bottom * fv
+}
+
+/// Reinhard tone mapping as the shader does it: x = L · exposure, x / (1 + x).
+pub fn tone_map(l: f64, exposure: f64) -> f64 {
+    let x = (l * exposure).max(0.0);
+    x / (1.0 + x)
+}
+
+/// The eye-space vector `Vec4` helper for tests: the direction from a luminaire-frame point to the eye.
+pub fn view_direction(eye_local: Vec4, p: glam::Vec3) -> glam::Vec3 {
+    if eye_local.w > 0.5 {
+        (eye_local.truncate() - p).normalize_or_zero()
+    } else {
+        eye_local.truncate().normalize_or_zero()
+    }
+}

@@ -1,0 +1,171 @@
+//! Luminaires, instances and frames: the scene a host builds through the C API.
+//!
+//! A luminaire is loaded once (its data uploaded once); instances refer to it with their own model
+//! matrix (luminaire frame → world, metres). Ids are never reused within a renderer, so a stale id
+//! is an error, never another object.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::Mat4;
+
+use super::camera::HostCamera;
+use super::context::{ContextDesc, GpuContext};
+use super::farfield::{FarfieldLuminaire, FarfieldPass, RenderOptions};
+use super::target::RenderTarget;
+use super::GpuError;
+use crate::photometry::{self, LoadOptions, Photometry};
+
+/// Identifies a luminaire in a renderer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct LuminaireId(pub u64);
+
+/// Identifies an instance in a renderer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct InstanceId(pub u64);
+
+/// A luminaire the renderer can draw.
+#[derive(Debug)]
+pub enum Luminaire {
+    /// Far-field photometry (IES / EULUMDAT) drawn as its luminous opening.
+    Farfield(Arc<FarfieldLuminaire>),
+}
+
+impl Luminaire {
+    /// The far-field photometry, if that is what it is.
+    pub fn photometry(&self) -> Option<&Arc<Photometry>> {
+        match self {
+            Luminaire::Farfield(f) => Some(&f.photometry),
+        }
+    }
+}
+
+#[derive(Debug)]
+struct Instance {
+    luminaire: LuminaireId,
+    model: Mat4,
+}
+
+/// The renderer: a GPU context, the passes, luminaires and instances.
+#[derive(Debug)]
+pub struct Renderer {
+    /// The GPU context.
+    pub ctx: GpuContext,
+    farfield: FarfieldPass,
+    luminaires: BTreeMap<LuminaireId, Luminaire>,
+    instances: BTreeMap<InstanceId, Instance>,
+    next_id: u64,
+}
+
+impl Renderer {
+    /// Opens a device and compiles the passes.
+    pub fn new(desc: &ContextDesc) -> Result<Self, GpuError> {
+        let ctx = GpuContext::new(desc)?;
+        let farfield = FarfieldPass::new(&ctx)?;
+        Ok(Renderer {
+            ctx,
+            farfield,
+            luminaires: BTreeMap::new(),
+            instances: BTreeMap::new(),
+            next_id: 1,
+        })
+    }
+
+    fn next(&mut self) -> u64 {
+        let id = self.next_id;
+        self.next_id += 1;
+        id
+    }
+
+    /// Loads a luminaire from a file (format detected: IES, EULUMDAT).
+    pub fn load_luminaire(&mut self, path: &Path, opts: &LoadOptions) -> Result<LuminaireId, GpuError> {
+        let p = photometry::load(path, opts)?;
+        self.add_photometry(Arc::new(p))
+    }
+
+    /// Adds far-field photometry as a luminaire.
+    pub fn add_photometry(&mut self, p: Arc<Photometry>) -> Result<LuminaireId, GpuError> {
+        let lum = self.farfield.upload(&self.ctx, p)?;
+        let id = LuminaireId(self.next());
+        self.luminaires.insert(id, Luminaire::Farfield(Arc::new(lum)));
+        Ok(id)
+    }
+
+    /// A luminaire by id.
+    pub fn luminaire(&self, id: LuminaireId) -> Result<&Luminaire, GpuError> {
+        self.luminaires
+            .get(&id)
+            .ok_or_else(|| GpuError::invalid("luminaire", format!("no luminaire with id {}", id.0)))
+    }
+
+    /// Removes a luminaire and every instance of it.
+    pub fn remove_luminaire(&mut self, id: LuminaireId) -> Result<(), GpuError> {
+        self.luminaires
+            .remove(&id)
+            .ok_or_else(|| GpuError::invalid("luminaire", format!("no luminaire with id {}", id.0)))?;
+        self.instances.retain(|_, i| i.luminaire != id);
+        Ok(())
+    }
+
+    /// Adds an instance of a luminaire with a model matrix (luminaire frame → world).
+    pub fn add_instance(&mut self, luminaire: LuminaireId, model: Mat4) -> Result<InstanceId, GpuError> {
+        self.luminaire(luminaire)?;
+        check_model(&model)?;
+        let id = InstanceId(self.next());
+        self.instances.insert(id, Instance { luminaire, model });
+        Ok(id)
+    }
+
+    /// Whether an instance exists.
+    pub fn has_instance(&self, id: InstanceId) -> bool {
+        self.instances.contains_key(&id)
+    }
+
+    /// Sets an instance's model matrix.
+    pub fn set_transform(&mut self, id: InstanceId, model: Mat4) -> Result<(), GpuError> {
+        check_model(&model)?;
+        let inst = self.instances.get_mut(&id).ok_or_else(|| {
+            GpuError::invalid(
+                "instance",
+                format!("no instance with id {} (destroyed, or its luminaire was)", id.0),
+            )
+        })?;
+        inst.model = model;
+        Ok(())
+    }
+
+    /// Removes an instance.
+    pub fn remove_instance(&mut self, id: InstanceId) -> Result<(), GpuError> {
+        self.instances
+            .remove(&id)
+            .map(|_| ())
+            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))
+    }
+
+    /// Renders every instance into `target`.
+    pub fn render(
+        &mut self,
+        target: &mut RenderTarget,
+        camera: &HostCamera,
+        options: &RenderOptions,
+    ) -> Result<(), GpuError> {
+        let mut list: Vec<(&FarfieldLuminaire, Mat4)> = Vec::with_capacity(self.instances.len());
+        for inst in self.instances.values() {
+            if let Some(Luminaire::Farfield(f)) = self.luminaires.get(&inst.luminaire) {
+                list.push((f.as_ref(), inst.model));
+            }
+        }
+        self.farfield.render(&self.ctx, target, camera, options, &list)
+    }
+}
+
+fn check_model(m: &Mat4) -> Result<(), GpuError> {
+    if !m.is_finite() {
+        return Err(GpuError::invalid("model", "matrix has a NaN or infinite element"));
+    }
+    if m.determinant().abs() < 1e-30 {
+        return Err(GpuError::invalid("model", "matrix is singular"));
+    }
+    Ok(())
+}

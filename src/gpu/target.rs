@@ -1,0 +1,376 @@
+//! Render targets: a colour image (linear cd/m² as RGBA16F/RGBA32F, or tone-mapped RGBA8 sRGB), an
+//! optional depth output a host can use (an R32F copy a GL host can sample, or the D32F attachment
+//! itself), an internal D32F depth buffer, export of each as an opaque fd, and read-back.
+
+use std::os::fd::OwnedFd;
+
+use super::context::GpuContext;
+use super::GpuError;
+use crate::interop::{ExportInfo, ExportableImage};
+
+/// Colour formats of a target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ColorFormat {
+    /// Linear luminance in cd/m², half float (overflows above 65,504 cd/m²: use RGBA32F for bare LEDs).
+    Rgba16Float,
+    /// Linear luminance in cd/m², float.
+    Rgba32Float,
+    /// Reinhard-tone-mapped display values, sRGB-encoded 8-bit.
+    Rgba8Srgb,
+}
+
+impl ColorFormat {
+    /// The wgpu format.
+    pub fn wgpu(self) -> wgpu::TextureFormat {
+        match self {
+            ColorFormat::Rgba16Float => wgpu::TextureFormat::Rgba16Float,
+            ColorFormat::Rgba32Float => wgpu::TextureFormat::Rgba32Float,
+            ColorFormat::Rgba8Srgb => wgpu::TextureFormat::Rgba8UnormSrgb,
+        }
+    }
+    /// Bytes per pixel.
+    pub fn bytes_per_pixel(self) -> u32 {
+        match self {
+            ColorFormat::Rgba16Float => 8,
+            ColorFormat::Rgba32Float => 16,
+            ColorFormat::Rgba8Srgb => 4,
+        }
+    }
+    /// The GL internal format a GL host imports it with.
+    pub fn gl_internal_format(self) -> u32 {
+        match self {
+            ColorFormat::Rgba16Float => 0x881A, // GL_RGBA16F
+            ColorFormat::Rgba32Float => 0x8814, // GL_RGBA32F
+            ColorFormat::Rgba8Srgb => 0x8C43,   // GL_SRGB8_ALPHA8
+        }
+    }
+}
+
+/// Depth outputs of a target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DepthFormat {
+    /// No depth output (an internal depth buffer is still used).
+    None,
+    /// An R32F colour image holding the window depth in the host's convention (GL hosts sample it).
+    R32Float,
+    /// The D32F depth attachment itself (Vulkan hosts can use it as a depth image).
+    Depth32Float,
+}
+
+impl DepthFormat {
+    /// The GL internal format of the exported depth image, 0 when there is none.
+    pub fn gl_internal_format(self) -> u32 {
+        match self {
+            DepthFormat::None => 0,
+            DepthFormat::R32Float => 0x822E,     // GL_R32F
+            DepthFormat::Depth32Float => 0x8CAC, // GL_DEPTH_COMPONENT32F
+        }
+    }
+    /// Bytes per pixel of the exported/read-back depth.
+    pub fn bytes_per_pixel(self) -> u32 {
+        match self {
+            DepthFormat::None => 0,
+            _ => 4,
+        }
+    }
+}
+
+/// Which image of a target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Attachment {
+    /// The colour image.
+    Color,
+    /// The depth output (R32F copy or D32F attachment).
+    Depth,
+}
+
+/// How to create a target.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TargetDesc {
+    /// Width in pixels (1…16384).
+    pub width: u32,
+    /// Height in pixels (1…16384).
+    pub height: u32,
+    /// Colour format.
+    pub color: ColorFormat,
+    /// Depth output.
+    pub depth: DepthFormat,
+    /// Create exportable images (requires external memory); otherwise plain textures (read-back only).
+    pub exportable: bool,
+}
+
+/// Largest target side in pixels.
+pub const MAX_TARGET_SIZE: u32 = 16384;
+
+/// A texture that may be exportable.
+#[derive(Debug)]
+pub(crate) enum Image {
+    Exportable(ExportableImage),
+    Plain(wgpu::Texture),
+}
+
+impl Image {
+    pub(crate) fn texture(&self) -> &wgpu::Texture {
+        match self {
+            Image::Exportable(e) => &e.texture,
+            Image::Plain(t) => t,
+        }
+    }
+}
+
+/// A render target.
+#[derive(Debug)]
+pub struct RenderTarget {
+    /// How it was created.
+    pub desc: TargetDesc,
+    pub(crate) color: Image,
+    pub(crate) depth_copy: Option<Image>,
+    pub(crate) depth: Image,
+    /// Number of frames rendered into it.
+    pub frames: u64,
+}
+
+impl RenderTarget {
+    /// Creates a target.
+    pub fn new(ctx: &GpuContext, desc: &TargetDesc) -> Result<Self, GpuError> {
+        if desc.width == 0 || desc.height == 0 || desc.width > MAX_TARGET_SIZE || desc.height > MAX_TARGET_SIZE {
+            return Err(GpuError::invalid(
+                "width/height",
+                format!("{}×{} is outside 1…{MAX_TARGET_SIZE}", desc.width, desc.height),
+            ));
+        }
+        if desc.exportable && !ctx.caps.external_memory {
+            return Err(GpuError::Unsupported(format!(
+                "the device ({}) has no VK_KHR_external_memory_fd: create the target with exportable = false and use read-back",
+                ctx.caps.adapter_name
+            )));
+        }
+        ctx.scoped("creating a render target", || {
+            let make = |label: &str, format: wgpu::TextureFormat, export: bool| -> Result<Image, GpuError> {
+                if export {
+                    Ok(Image::Exportable(ExportableImage::new(
+                        &ctx.adapter,
+                        &ctx.device,
+                        label,
+                        desc.width,
+                        desc.height,
+                        format,
+                    )?))
+                } else {
+                    Ok(Image::Plain(ctx.device.create_texture(&wgpu::TextureDescriptor {
+                        label: Some(label),
+                        size: wgpu::Extent3d {
+                            width: desc.width,
+                            height: desc.height,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                            | wgpu::TextureUsages::COPY_SRC
+                            | wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })))
+                }
+            };
+            let color = make("lumiview colour", desc.color.wgpu(), desc.exportable)?;
+            let depth_copy = match desc.depth {
+                DepthFormat::R32Float => Some(make(
+                    "lumiview depth (R32F)",
+                    wgpu::TextureFormat::R32Float,
+                    desc.exportable,
+                )?),
+                _ => None,
+            };
+            let depth = make(
+                "lumiview depth (D32F)",
+                wgpu::TextureFormat::Depth32Float,
+                desc.exportable && desc.depth == DepthFormat::Depth32Float,
+            )?;
+            Ok(RenderTarget {
+                desc: *desc,
+                color,
+                depth_copy,
+                depth,
+                frames: 0,
+            })
+        })
+    }
+
+    /// The image behind `which`.
+    pub(crate) fn image(&self, which: Attachment) -> Result<&Image, GpuError> {
+        match which {
+            Attachment::Color => Ok(&self.color),
+            Attachment::Depth => match self.desc.depth {
+                DepthFormat::None => Err(GpuError::invalid(
+                    "attachment",
+                    "the target has no depth output (created with depth format NONE)",
+                )),
+                DepthFormat::R32Float => self
+                    .depth_copy
+                    .as_ref()
+                    .ok_or_else(|| GpuError::invalid("attachment", "missing depth copy")),
+                DepthFormat::Depth32Float => Ok(&self.depth),
+            },
+        }
+    }
+
+    /// The exportable images (those released to the host after each frame).
+    pub(crate) fn exportables_mut(&mut self) -> Vec<&mut ExportableImage> {
+        let mut v = Vec::new();
+        if let Image::Exportable(e) = &mut self.color {
+            v.push(e);
+        }
+        if let Some(Image::Exportable(e)) = &mut self.depth_copy {
+            v.push(e);
+        }
+        if let Image::Exportable(e) = &mut self.depth {
+            v.push(e);
+        }
+        v
+    }
+
+    /// Exports `which` as a new opaque fd (owned by the caller) with what a host needs to import it.
+    pub fn export(&self, ctx: &GpuContext, which: Attachment) -> Result<(OwnedFd, ExportInfo), GpuError> {
+        match self.image(which)? {
+            Image::Exportable(e) => Ok((e.export_fd(&ctx.device)?, e.info)),
+            Image::Plain(_) => Err(GpuError::Unsupported(
+                "the target was created with exportable = false".into(),
+            )),
+        }
+    }
+
+    /// Bytes per pixel of `which` as read back.
+    pub fn bytes_per_pixel(&self, which: Attachment) -> u32 {
+        match which {
+            Attachment::Color => self.desc.color.bytes_per_pixel(),
+            Attachment::Depth => self.desc.depth.bytes_per_pixel(),
+        }
+    }
+
+    /// Reads `which` back into memory: rows of `width · bytes_per_pixel` bytes, memory row 0 first
+    /// (the same row order as the exported image). Fails before the first render.
+    pub fn read(&mut self, ctx: &GpuContext, which: Attachment) -> Result<Vec<u8>, GpuError> {
+        if self.frames == 0 {
+            return Err(GpuError::invalid(
+                "target",
+                "nothing has been rendered into the target yet",
+            ));
+        }
+        let bpp = self.bytes_per_pixel(which);
+        let (w, h) = (self.desc.width, self.desc.height);
+        let row = w * bpp;
+        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let family = ctx.caps.queue_family;
+        let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lumiview read-back"),
+            size: padded as u64 * h as u64,
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        let image = self.image(which)?;
+        let texture = image.texture().clone();
+        let mut cbs = Vec::new();
+        if let Image::Exportable(e) = image {
+            cbs.extend(e.encode_acquire(&ctx.device, family));
+        }
+        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("read-back"),
+        });
+        let is_depth = texture.format().is_depth_stencil_format();
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: if is_depth {
+                    wgpu::TextureAspect::DepthOnly
+                } else {
+                    wgpu::TextureAspect::All
+                },
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &buffer,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(h),
+                },
+            },
+            wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+        );
+        // Return wgpu's tracker to the attachment state the release barrier starts from: an empty
+        // pass that loads and stores the image.
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        {
+            let _pass = if is_depth {
+                enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("restore attachment state"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+            } else {
+                enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("restore attachment state"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: &view,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                })
+            };
+        }
+        cbs.push(enc.finish());
+        if let Image::Exportable(e) = image {
+            cbs.push(e.encode_release(&ctx.device, family));
+        }
+        ctx.scoped("reading a target back", || {
+            ctx.queue.submit(cbs);
+            Ok(())
+        })?;
+        let slice = buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        ctx.wait_idle()?;
+        rx.recv()
+            .map_err(|_| GpuError::DeviceLost("read-back mapping was dropped".into()))?
+            .map_err(|e| GpuError::DeviceLost(format!("mapping the read-back buffer: {e}")))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| GpuError::DeviceLost(format!("reading the mapped read-back buffer: {e}")))?;
+        let mut out = Vec::with_capacity(row as usize * h as usize);
+        for r in 0..h as usize {
+            let start = r * padded as usize;
+            out.extend_from_slice(&data[start..start + row as usize]);
+        }
+        drop(data);
+        buffer.unmap();
+        Ok(out)
+    }
+}
