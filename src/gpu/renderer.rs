@@ -135,6 +135,48 @@ impl Renderer {
         Ok(())
     }
 
+    /// An instance's luminaire and model matrix.
+    pub fn instance(&self, id: InstanceId) -> Result<(LuminaireId, Mat4), GpuError> {
+        self.instances
+            .get(&id)
+            .map(|i| (i.luminaire, i.model))
+            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))
+    }
+
+    /// Illuminance in lux at a world point on a surface with unit normal `normal` from one instance,
+    /// by the inverse-square law E = I(d) · max(0, cos i) / r², where d is the direction from the
+    /// instance's photometric centre to the point in its luminaire frame, r the distance in metres and
+    /// i the angle between the normal and the direction back to the luminaire. The far-field
+    /// approximation (the host's shaders evaluate the same formula from the look-up tables).
+    pub fn illuminance(&self, id: InstanceId, point: glam::Vec3, normal: glam::Vec3) -> Result<f64, GpuError> {
+        let (lum, model) = self.instance(id)?;
+        let Some(p) = self.luminaire(lum)?.photometry() else {
+            return Err(GpuError::invalid(
+                "instance",
+                "the luminaire has no far-field photometry",
+            ));
+        };
+        if !point.is_finite() || !normal.is_finite() || normal.length_squared() < 1e-12 {
+            return Err(GpuError::invalid(
+                "point/normal",
+                "must be finite with a non-zero normal",
+            ));
+        }
+        let centre = model.transform_point3(glam::Vec3::ZERO).as_dvec3();
+        let to_point = point.as_dvec3() - centre;
+        let r2 = to_point.length_squared();
+        if r2 < 1e-12 {
+            return Err(GpuError::invalid(
+                "point",
+                "coincides with the luminaire's photometric centre",
+            ));
+        }
+        let local = model.inverse().as_dmat4().transform_vector3(to_point).normalize();
+        let cd = p.web.sample_dir([local.x, local.y, local.z]);
+        let cos_i = (-to_point.normalize()).dot(normal.as_dvec3().normalize()).max(0.0);
+        Ok(cd * cos_i / r2)
+    }
+
     /// Removes an instance.
     pub fn remove_instance(&mut self, id: InstanceId) -> Result<(), GpuError> {
         self.instances

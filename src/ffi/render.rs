@@ -1,0 +1,168 @@
+//! Rendering a frame: the host's camera and render options.
+
+use super::context::{lumi_context, with_context, ContextInner};
+use super::target::target_mut;
+use super::{lumi_status, FfiError};
+use crate::gpu::{DepthRange, HostCamera, Origin, OutputMode, Overlays, RenderOptions};
+
+/// Clip depth range: OpenGL's −1…1.
+pub const LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE: u32 = 0;
+/// Clip depth range: 0…1 (Vulkan, D3D, `glClipControl(.., GL_ZERO_TO_ONE)`).
+pub const LUMI_DEPTH_RANGE_ZERO_TO_ONE: u32 = 1;
+
+/// Framebuffer origin: memory row 0 is the top row (Vulkan, D3D).
+pub const LUMI_ORIGIN_TOP_LEFT: u32 = 0;
+/// Framebuffer origin: memory row 0 is the bottom row (OpenGL).
+pub const LUMI_ORIGIN_BOTTOM_LEFT: u32 = 1;
+
+/// Output: linear luminance in cd/m² (float targets).
+pub const LUMI_OUTPUT_LUMINANCE: u32 = 0;
+/// Output: Reinhard with exposure, x = L · exposure, display value x / (1 + x).
+pub const LUMI_OUTPUT_TONE_MAPPED: u32 = 1;
+
+/// Overlay bit: photometric-solid wireframe (orange).
+pub const LUMI_OVERLAY_SOLID: u32 = 1;
+/// Overlay bit: housing box from the file's luminaire dimensions (blue), where it has them.
+pub const LUMI_OVERLAY_HOUSING: u32 = 2;
+
+/// The host's camera for one frame.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct lumi_camera {
+    /// World → eye, column-major (glm / GL layout).
+    pub view: [f32; 16],
+    /// Eye → clip, column-major, in the host's own convention.
+    pub projection: [f32; 16],
+    /// `LUMI_DEPTH_RANGE_*`: the host's clip depth range; depth is written the way the host's own
+    /// depth buffer would hold it (GL: window depth (z_ndc + 1)/2).
+    pub depth_range: u32,
+    /// Near maps to 1 and far to 0 (depth test GREATER, cleared to 0).
+    pub reversed_z: bool,
+    /// `LUMI_ORIGIN_*`: which image row is memory row 0.
+    pub origin: u32,
+}
+
+/// Per-frame options.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct lumi_render_options {
+    /// `LUMI_OUTPUT_*`. RGBA8 sRGB targets need `LUMI_OUTPUT_TONE_MAPPED`.
+    pub output: u32,
+    /// Exposure in m²/cd for tone mapping (> 0).
+    pub exposure: f32,
+    /// `LUMI_OVERLAY_*` bits.
+    pub overlays: u32,
+    /// Radius of the photometric solid at the maximum intensity, metres (> 0).
+    pub solid_radius_m: f32,
+}
+
+/// A camera with identity matrices, GL depth range, no reversed Z, bottom-left origin (a GL host).
+#[no_mangle]
+pub extern "C" fn lumi_camera_default() -> lumi_camera {
+    let id = glam::Mat4::IDENTITY.to_cols_array();
+    lumi_camera {
+        view: id,
+        projection: id,
+        depth_range: LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE,
+        reversed_z: false,
+        origin: LUMI_ORIGIN_BOTTOM_LEFT,
+    }
+}
+
+/// Default options: luminance output, exposure 0.001 m²/cd, no overlays, solid radius 0.5 m.
+#[no_mangle]
+pub extern "C" fn lumi_render_options_default() -> lumi_render_options {
+    lumi_render_options {
+        output: LUMI_OUTPUT_LUMINANCE,
+        exposure: 1e-3,
+        overlays: 0,
+        solid_radius_m: 0.5,
+    }
+}
+
+fn camera(c: &lumi_camera) -> Result<HostCamera, FfiError> {
+    let m = |a: &[f32; 16], name: &str| {
+        if a.iter().any(|v| !v.is_finite()) {
+            Err(FfiError::invalid(name, "matrix has a NaN or infinite element"))
+        } else {
+            Ok(glam::Mat4::from_cols_array(a))
+        }
+    };
+    Ok(HostCamera {
+        view: m(&c.view, "camera.view")?,
+        projection: m(&c.projection, "camera.projection")?,
+        depth_range: match c.depth_range {
+            LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE => DepthRange::NegOneToOne,
+            LUMI_DEPTH_RANGE_ZERO_TO_ONE => DepthRange::ZeroToOne,
+            v => return Err(FfiError::invalid("camera.depth_range", format!("unknown value {v}"))),
+        },
+        reversed_z: c.reversed_z,
+        origin: match c.origin {
+            LUMI_ORIGIN_TOP_LEFT => Origin::TopLeft,
+            LUMI_ORIGIN_BOTTOM_LEFT => Origin::BottomLeft,
+            v => return Err(FfiError::invalid("camera.origin", format!("unknown value {v}"))),
+        },
+    })
+}
+
+fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
+    if o.overlays & !(LUMI_OVERLAY_SOLID | LUMI_OVERLAY_HOUSING) != 0 {
+        return Err(FfiError::invalid(
+            "options.overlays",
+            format!("unknown bits in {:#x}", o.overlays),
+        ));
+    }
+    Ok(RenderOptions {
+        output: match o.output {
+            LUMI_OUTPUT_LUMINANCE => OutputMode::Luminance,
+            LUMI_OUTPUT_TONE_MAPPED => OutputMode::ToneMapped,
+            v => return Err(FfiError::invalid("options.output", format!("unknown value {v}"))),
+        },
+        exposure: o.exposure,
+        overlays: Overlays {
+            solid: o.overlays & LUMI_OVERLAY_SOLID != 0,
+            housing: o.overlays & LUMI_OVERLAY_HOUSING != 0,
+        },
+        solid_radius_m: o.solid_radius_m,
+    })
+}
+
+/// Renders every instance of the context into `target`, seen by `camera`.
+///
+/// Synchronisation (docs/interop.md): the call returns after the GPU finished; the exported images
+/// are then released to `VK_QUEUE_FAMILY_EXTERNAL` in `VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL`.
+/// The host must finish its reads of this target (glFinish or a fence) before the next
+/// `lumi_render` into it; two targets used in turn avoid the stall.
+///
+/// - `options` may be NULL for the defaults.
+///
+/// # Safety
+/// `ctx` is a live context; `camera` valid; `options` NULL or valid.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_render(
+    ctx: *mut lumi_context,
+    target: super::target::lumi_target,
+    cam: *const lumi_camera,
+    opts: *const lumi_render_options,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_render", ctx, |c| {
+            let Some(cam) = cam.as_ref() else {
+                return Err(FfiError::null("camera"));
+            };
+            let cam = camera(cam)?;
+            let o = match opts.as_ref() {
+                Some(o) => options(o)?,
+                None => options(&lumi_render_options_default())?,
+            };
+            target_mut(c, target)?;
+            let ContextInner { renderer, targets, .. } = c;
+            let t = targets
+                .get_mut(&target)
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            renderer.render(t, &cam, &o)?;
+            Ok(())
+        })
+    }
+}

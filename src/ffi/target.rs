@@ -1,0 +1,297 @@
+//! Render targets: create, destroy, export as opaque fds, read back.
+
+use std::os::fd::IntoRawFd;
+
+use super::context::{lumi_context, with_context, ContextInner};
+use super::{lumi_status, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
+use crate::gpu::{Attachment, ColorFormat, DepthFormat, RenderTarget, TargetDesc};
+
+/// Handle of a render target, owned by its context (0 is never a valid handle).
+pub type lumi_target = u64;
+
+/// Colour format: linear cd/m² in RGBA16F (alpha = coverage, premultiplied).
+pub const LUMI_COLOR_RGBA16F: u32 = 0;
+/// Colour format: linear cd/m² in RGBA32F.
+pub const LUMI_COLOR_RGBA32F: u32 = 1;
+/// Colour format: Reinhard-tone-mapped display values, RGBA8 sRGB.
+pub const LUMI_COLOR_RGBA8_SRGB: u32 = 2;
+
+/// Depth output: none.
+pub const LUMI_DEPTH_NONE: u32 = 0;
+/// Depth output: R32F colour image with the window depth in the host's convention (GL hosts sample it).
+pub const LUMI_DEPTH_R32F: u32 = 1;
+/// Depth output: the D32F depth attachment itself (Vulkan hosts).
+pub const LUMI_DEPTH_D32F: u32 = 2;
+
+/// Attachment selector: the colour image.
+pub const LUMI_ATTACHMENT_COLOR: u32 = 0;
+/// Attachment selector: the depth output.
+pub const LUMI_ATTACHMENT_DEPTH: u32 = 1;
+
+/// `GL_OPTIMAL_TILING_EXT`, the GL tiling every exported image uses.
+pub const LUMI_GL_OPTIMAL_TILING_EXT: u32 = 0x9584;
+/// `GL_LAYOUT_SHADER_READ_ONLY_EXT`, the GL layout matching the release layout.
+pub const LUMI_GL_LAYOUT_SHADER_READ_ONLY_EXT: u32 = 0x9591;
+
+/// How to create a target. Start from `lumi_target_desc_default()`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct lumi_target_desc {
+    /// Width in pixels, 1…16384.
+    pub width: u32,
+    /// Height in pixels, 1…16384.
+    pub height: u32,
+    /// One of `LUMI_COLOR_*`.
+    pub color_format: u32,
+    /// One of `LUMI_DEPTH_*`.
+    pub depth_format: u32,
+    /// Create exportable images (needs `external_memory` in `lumi_device_caps`); false gives
+    /// read-back-only targets.
+    pub exportable: bool,
+}
+
+/// Everything a host needs to import one exported image.
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct lumi_export {
+    /// A new opaque fd owned by the caller: a successful `glImportMemoryFdEXT` or Vulkan import
+    /// takes ownership of it; otherwise the caller must `close()` it.
+    pub fd: i32,
+    /// Allocation size in bytes (the `size` argument of `glImportMemoryFdEXT`, `allocationSize` in Vulkan).
+    pub allocation_size: u64,
+    /// `VkFormat` of the image.
+    pub vk_format: i32,
+    /// GL internal format for `glTextureStorageMem2DEXT` (e.g. `GL_RGBA16F`, `GL_R32F`).
+    pub gl_internal_format: u32,
+    /// `VkImageTiling` (always `VK_IMAGE_TILING_OPTIMAL` = 0).
+    pub vk_tiling: i32,
+    /// `GL_TEXTURE_TILING_EXT` value (always `GL_OPTIMAL_TILING_EXT`).
+    pub gl_tiling: u32,
+    /// The allocation is dedicated to the image (`GL_DEDICATED_MEMORY_OBJECT_EXT` = GL_TRUE;
+    /// Vulkan hosts chain `VkMemoryDedicatedAllocateInfo`).
+    pub dedicated: bool,
+    /// `VkImageLayout` the image is in after `lumi_render` returns (released to
+    /// `VK_QUEUE_FAMILY_EXTERNAL`): `VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL`.
+    pub vk_layout: i32,
+    /// The matching GL layout (`GL_LAYOUT_SHADER_READ_ONLY_EXT`).
+    pub gl_layout: u32,
+    /// `VkImageUsageFlags` the image was created with (a Vulkan host creates its image with the same).
+    pub vk_usage: u32,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// The exporting device's UUID (compare with `GL_DEVICE_UUID_EXT` before importing).
+    pub device_uuid: [u8; 16],
+    /// The exporting driver's UUID (compare with `GL_DRIVER_UUID_EXT`).
+    pub driver_uuid: [u8; 16],
+}
+
+/// A default target: 1280 × 720, RGBA16F, R32F depth, exportable.
+#[no_mangle]
+pub extern "C" fn lumi_target_desc_default() -> lumi_target_desc {
+    lumi_target_desc {
+        width: 1280,
+        height: 720,
+        color_format: LUMI_COLOR_RGBA16F,
+        depth_format: LUMI_DEPTH_R32F,
+        exportable: true,
+    }
+}
+
+fn color_format(v: u32) -> Result<ColorFormat, FfiError> {
+    match v {
+        LUMI_COLOR_RGBA16F => Ok(ColorFormat::Rgba16Float),
+        LUMI_COLOR_RGBA32F => Ok(ColorFormat::Rgba32Float),
+        LUMI_COLOR_RGBA8_SRGB => Ok(ColorFormat::Rgba8Srgb),
+        v => Err(FfiError::invalid("desc.color_format", format!("unknown value {v}"))),
+    }
+}
+
+fn depth_format(v: u32) -> Result<DepthFormat, FfiError> {
+    match v {
+        LUMI_DEPTH_NONE => Ok(DepthFormat::None),
+        LUMI_DEPTH_R32F => Ok(DepthFormat::R32Float),
+        LUMI_DEPTH_D32F => Ok(DepthFormat::Depth32Float),
+        v => Err(FfiError::invalid("desc.depth_format", format!("unknown value {v}"))),
+    }
+}
+
+pub(crate) fn attachment(v: u32) -> Result<Attachment, FfiError> {
+    match v {
+        LUMI_ATTACHMENT_COLOR => Ok(Attachment::Color),
+        LUMI_ATTACHMENT_DEPTH => Ok(Attachment::Depth),
+        v => Err(FfiError::invalid("attachment", format!("unknown value {v}"))),
+    }
+}
+
+pub(crate) fn target_mut(c: &mut ContextInner, t: lumi_target) -> Result<&mut RenderTarget, FfiError> {
+    c.targets
+        .get_mut(&t)
+        .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {t}")))
+}
+
+/// Creates a render target. `out` is written only on success.
+///
+/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` (size, unknown format), `LUMI_STATUS_UNSUPPORTED`
+/// (exportable without external memory, or a format the driver cannot export).
+///
+/// # Safety
+/// `ctx` is a live context; `desc` valid; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_target_create(
+    ctx: *mut lumi_context,
+    desc: *const lumi_target_desc,
+    out: *mut lumi_target,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_target_create", ctx, |c| {
+            let Some(d) = desc.as_ref() else {
+                return Err(FfiError::null("desc"));
+            };
+            if out.is_null() {
+                return Err(FfiError::null("out"));
+            }
+            let td = TargetDesc {
+                width: d.width,
+                height: d.height,
+                color: color_format(d.color_format)?,
+                depth: depth_format(d.depth_format)?,
+                exportable: d.exportable,
+            };
+            let t = RenderTarget::new(&c.renderer.ctx, &td)?;
+            let id = c.next_target;
+            c.next_target += 1;
+            c.targets.insert(id, t);
+            write_out(out, id);
+            Ok(())
+        })
+    }
+}
+
+/// Frees a target (waits for the GPU). Handle 0 is ignored; a stale handle is an error. Memory a
+/// host imported stays valid until the host releases its import.
+///
+/// # Safety
+/// `ctx` is a live context.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_target_destroy(ctx: *mut lumi_context, target: lumi_target) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_target_destroy", ctx, |c| {
+            if target == 0 {
+                return Ok(());
+            }
+            c.renderer.ctx.wait_idle()?;
+            c.targets
+                .remove(&target)
+                .map(|_| ())
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))
+        })
+    }
+}
+
+/// Exports one image of a target as a new opaque fd plus what the host needs to import it.
+/// Each call returns a new fd (the caller owns it). The memory row 0 is the image row the host's
+/// `origin` (in `lumi_camera`) names as first: the top row for `LUMI_ORIGIN_TOP_LEFT`, the bottom
+/// row for `LUMI_ORIGIN_BOTTOM_LEFT`.
+///
+/// # Safety
+/// `ctx` is a live context; `out` writable (written only on success).
+#[no_mangle]
+pub unsafe extern "C" fn lumi_target_export(
+    ctx: *mut lumi_context,
+    target: lumi_target,
+    which: u32,
+    out: *mut lumi_export,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_target_export", ctx, |c| {
+            if out.is_null() {
+                return Err(FfiError::null("out"));
+            }
+            let which = attachment(which)?;
+            let caps = c.renderer.ctx.caps.clone();
+            let t = c
+                .targets
+                .get(&target)
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            let gl_internal_format = match which {
+                Attachment::Color => t.desc.color.gl_internal_format(),
+                Attachment::Depth => t.desc.depth.gl_internal_format(),
+            };
+            let (fd, info) = t.export(&c.renderer.ctx, which)?;
+            write_out(
+                out,
+                lumi_export {
+                    fd: fd.into_raw_fd(),
+                    allocation_size: info.allocation_size,
+                    vk_format: info.vk_format,
+                    gl_internal_format,
+                    vk_tiling: info.vk_tiling,
+                    gl_tiling: LUMI_GL_OPTIMAL_TILING_EXT,
+                    dedicated: info.dedicated,
+                    vk_layout: info.vk_layout,
+                    gl_layout: LUMI_GL_LAYOUT_SHADER_READ_ONLY_EXT,
+                    vk_usage: info.vk_usage,
+                    width: info.width,
+                    height: info.height,
+                    device_uuid: caps.device_uuid,
+                    driver_uuid: caps.driver_uuid,
+                },
+            );
+            Ok(())
+        })
+    }
+}
+
+/// Reads one image of a target back into `buffer` for hosts without interop: rows of
+/// `width × bytes-per-pixel` bytes (RGBA16F 8, RGBA32F 16, RGBA8 4, depth 4), memory row 0 first,
+/// little-endian. `written` receives the byte count (or, on `LUMI_STATUS_BUFFER_TOO_SMALL`, the size
+/// needed). Fails before the first render.
+///
+/// # Safety
+/// `ctx` is a live context; `buffer` has `buffer_len` writable bytes; `written` writable.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_target_read_pixels(
+    ctx: *mut lumi_context,
+    target: lumi_target,
+    which: u32,
+    buffer: *mut u8,
+    buffer_len: usize,
+    written: *mut usize,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_target_read_pixels", ctx, |c| {
+            if buffer.is_null() {
+                return Err(FfiError::null("buffer"));
+            }
+            if written.is_null() {
+                return Err(FfiError::null("written"));
+            }
+            let which = attachment(which)?;
+            let ContextInner { renderer, targets, .. } = c;
+            let t = targets
+                .get_mut(&target)
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            let need = t.desc.width as usize * t.desc.height as usize * t.bytes_per_pixel(which) as usize;
+            if which == Attachment::Depth && t.desc.depth == DepthFormat::None {
+                return Err(FfiError::invalid("which", "the target has no depth output"));
+            }
+            if buffer_len < need {
+                write_out(written, need);
+                return Err(FfiError::new(
+                    LUMI_STATUS_BUFFER_TOO_SMALL,
+                    format!("buffer_len {buffer_len} < {need} bytes needed"),
+                ));
+            }
+            let data = t.read(&renderer.ctx, which)?;
+            std::ptr::copy_nonoverlapping(data.as_ptr(), buffer, data.len());
+            write_out(written, data.len());
+            Ok(())
+        })
+    }
+}
