@@ -71,8 +71,7 @@ fn tone_map(l: f32) -> f32 {
     return x / (1.0 + x);
 }
 
-@fragment
-fn fs_opening(in: VsOut) -> FsOut {
+fn opening_color(in: VsOut) -> vec4<f32> {
     var d: vec3<f32>;
     if (inst.eye_local.w > 0.5) {
         d = normalize(inst.eye_local.xyz - in.local_pos);
@@ -80,25 +79,38 @@ fn fs_opening(in: VsOut) -> FsOut {
         d = normalize(inst.eye_local.xyz);
     }
     let l = luminance_towards(d);
-    var out: FsOut;
     if (inst.params.y > 0.5) {
         let t = tone_map(l);
-        out.color = vec4<f32>(t, t, t, 1.0);
-    } else {
-        out.color = vec4<f32>(l, l, l, 1.0);
+        return vec4<f32>(t, t, t, 1.0);
     }
-    out.depth = vec4<f32>(in.clip.z, 0.0, 0.0, 1.0);
-    return out;
+    return vec4<f32>(l, l, l, 1.0);
+}
+
+fn line_color() -> vec4<f32> {
+    if (inst.params.y > 0.5) {
+        return vec4<f32>(inst.line_color.rgb, 1.0);
+    }
+    return vec4<f32>(inst.line_color.rgb * inst.params.z, 1.0);
+}
+
+// Entry points with the R32F depth output (targets with LUMI_DEPTH_R32F) ...
+@fragment
+fn fs_opening(in: VsOut) -> FsOut {
+    return FsOut(opening_color(in), vec4<f32>(in.clip.z, 0.0, 0.0, 1.0));
 }
 
 @fragment
 fn fs_line(in: VsOut) -> FsOut {
-    var out: FsOut;
-    if (inst.params.y > 0.5) {
-        out.color = vec4<f32>(inst.line_color.rgb, 1.0);
-    } else {
-        out.color = vec4<f32>(inst.line_color.rgb * inst.params.z, 1.0);
-    }
-    out.depth = vec4<f32>(in.clip.z, 0.0, 0.0, 1.0);
-    return out;
+    return FsOut(line_color(), vec4<f32>(in.clip.z, 0.0, 0.0, 1.0));
+}
+
+// ... and without it (no unconsumed fragment outputs).
+@fragment
+fn fs_opening_color_only(in: VsOut) -> @location(0) vec4<f32> {
+    return opening_color(in);
+}
+
+@fragment
+fn fs_line_color_only(in: VsOut) -> @location(0) vec4<f32> {
+    return line_color();
 }

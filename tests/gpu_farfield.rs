@@ -83,6 +83,7 @@ fn centre_pixel_shows_l_of_the_view_direction() {
         );
         assert_eq!(depth[0], 1.0, "background depth is the far plane");
     }
+    gpu_common::assert_no_validation_messages();
 }
 
 #[test]
@@ -124,6 +125,7 @@ fn tone_mapped_rgba8_matches_reinhard() {
     assert!((got - want).abs() <= 1, "got {got}, want {want} (L = {l} cd/m²)");
     // Luminance output into an 8-bit target is refused.
     assert!(r.render(&mut t, &cam, &RenderOptions::default()).is_err());
+    gpu_common::assert_no_validation_messages();
 }
 
 #[test]
@@ -186,6 +188,7 @@ fn nearer_instance_occludes_and_bottom_left_origin_flips_rows() {
     assert!(!top.is_empty());
     let mirrored: Vec<usize> = top.iter().map(|row| 32 - row).rev().collect();
     assert_eq!(bottom, mirrored, "BottomLeft mirrors the rows");
+    gpu_common::assert_no_validation_messages();
 }
 
 #[test]
@@ -222,4 +225,5 @@ fn overlays_draw_lines_outside_the_opening() {
     let orange = with_solid.chunks_exact(4).filter(|p| p[0] > 200 && p[2] < 120).count();
     assert!(orange > 50, "solid wireframe pixels: {orange}");
     assert_eq!(plain.chunks_exact(4).filter(|p| p[0] > 200 && p[2] < 120).count(), 0);
+    gpu_common::assert_no_validation_messages();
 }

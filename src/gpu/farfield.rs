@@ -348,7 +348,12 @@ impl FarfieldPass {
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &self.module,
-                    entry_point: Some(if key.lines { "fs_line" } else { "fs_opening" }),
+                    entry_point: Some(match (key.lines, key.depth_copy) {
+                        (false, true) => "fs_opening",
+                        (true, true) => "fs_line",
+                        (false, false) => "fs_opening_color_only",
+                        (true, false) => "fs_line_color_only",
+                    }),
                     compilation_options: Default::default(),
                     targets,
                 }),

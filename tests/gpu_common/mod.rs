@@ -21,15 +21,55 @@ pub fn bega() -> Arc<Photometry> {
     Arc::new(photometry::load(&data("misc/arnold-usd_bega_50804K3.ies"), &LoadOptions::default()).unwrap())
 }
 
+/// Counts wgpu / Vulkan validation messages (warnings and errors logged by wgpu-hal and wgpu-core).
+struct CountingLogger;
+
+static MESSAGES: Mutex<Vec<String>> = Mutex::new(Vec::new());
+
+impl log::Log for CountingLogger {
+    fn enabled(&self, m: &log::Metadata) -> bool {
+        m.level() <= log::Level::Warn
+    }
+    fn log(&self, r: &log::Record) {
+        let t = r.target();
+        if r.level() <= log::Level::Warn && (t.starts_with("wgpu") || t.starts_with("naga")) {
+            let text = format!("[{}] {}: {}", r.level(), t, r.args());
+            eprintln!("{text}");
+            MESSAGES.lock().unwrap_or_else(|e| e.into_inner()).push(text);
+        }
+    }
+    fn flush(&self) {}
+}
+
+static LOGGER: CountingLogger = CountingLogger;
+
+/// The validation messages logged so far (and clears them).
+pub fn take_validation_messages() -> Vec<String> {
+    std::mem::take(&mut *MESSAGES.lock().unwrap_or_else(|e| e.into_inner()))
+}
+
+/// Whether the tests run with the validation layer (LUMIVIEW_VALIDATION=1).
+pub fn validation_on() -> bool {
+    std::env::var("LUMIVIEW_VALIDATION").is_ok_and(|v| v == "1")
+}
+
 /// A renderer on the machine's Vulkan device, with validation when LUMIVIEW_VALIDATION=1. `None`
 /// (with a printed reason) when there is no Vulkan device and CI is not set; a panic under CI.
 pub fn renderer() -> Option<Renderer> {
-    let validation = std::env::var("LUMIVIEW_VALIDATION").is_ok_and(|v| v == "1");
+    let validation = validation_on();
+    if log::set_logger(&LOGGER).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
     match Renderer::new(&ContextDesc {
         validation,
         ..ContextDesc::default()
     }) {
-        Ok(r) => Some(r),
+        Ok(r) => {
+            if validation && !r.ctx.adapter.get_info().name.is_empty() {
+                eprintln!("validation layer on for {}", r.ctx.caps.adapter_name);
+            }
+            Some(r)
+        }
         Err(e) => {
             if std::env::var("CI").is_ok_and(|v| !v.is_empty() && v != "0") {
                 panic!("CI=true and no usable Vulkan device: {e}");
@@ -67,4 +107,11 @@ pub fn look_at(eye: glam::Vec3, target: glam::Vec3, up: glam::Vec3) -> glam::Mat
 /// The ASA 15M R2 luminaire (square opening 0.378 m).
 pub fn asa() -> Arc<Photometry> {
     Arc::new(photometry::load(&data("misc/luxcore_ASA_15M_R2.ies"), &LoadOptions::default()).unwrap())
+}
+
+/// Asserts that no validation message was logged (with LUMIVIEW_VALIDATION=1 the Vulkan layer's
+/// messages arrive here through wgpu's log hook).
+pub fn assert_no_validation_messages() {
+    let m = take_validation_messages();
+    assert!(m.is_empty(), "{} validation message(s):\n{}", m.len(), m.join("\n"));
 }
