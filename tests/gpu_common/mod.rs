@@ -48,6 +48,13 @@ pub fn take_validation_messages() -> Vec<String> {
     std::mem::take(&mut *MESSAGES.lock().unwrap_or_else(|e| e.into_inner()))
 }
 
+/// Routes wgpu's log messages (and through them the validation layer's) to the counter.
+pub fn install_logger() {
+    if log::set_logger(&LOGGER).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
+}
+
 /// Whether the tests run with the validation layer (LUMIVIEW_VALIDATION=1).
 pub fn validation_on() -> bool {
     std::env::var("LUMIVIEW_VALIDATION").is_ok_and(|v| v == "1")
@@ -57,9 +64,7 @@ pub fn validation_on() -> bool {
 /// (with a printed reason) when there is no Vulkan device and CI is not set; a panic under CI.
 pub fn renderer() -> Option<Renderer> {
     let validation = validation_on();
-    if log::set_logger(&LOGGER).is_ok() {
-        log::set_max_level(log::LevelFilter::Warn);
-    }
+    install_logger();
     match Renderer::new(&ContextDesc {
         validation,
         ..ContextDesc::default()
