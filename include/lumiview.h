@@ -338,6 +338,9 @@ extern "C" {
 // function and the argument or file at fault; an empty string when no call on this thread failed.
 //
 // Thread safety: per thread; any thread may call it at any time.
+//
+// # Safety
+// `buffer` is NULL or points to `buffer_len` writable bytes.
 size_t lumi_last_error(char *buffer,
                        size_t buffer_len);
 

@@ -168,6 +168,9 @@ pub(crate) fn boundary(name: &str, on_panic: impl FnOnce(), f: impl FnOnce() -> 
 /// function and the argument or file at fault; an empty string when no call on this thread failed.
 ///
 /// Thread safety: per thread; any thread may call it at any time.
+///
+/// # Safety
+/// `buffer` is NULL or points to `buffer_len` writable bytes.
 #[no_mangle]
 pub unsafe extern "C" fn lumi_last_error(buffer: *mut c_char, buffer_len: usize) -> usize {
     let r = catch_unwind(|| {
