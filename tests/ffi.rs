@@ -100,6 +100,16 @@ fn lifecycle_errors_and_a_render_through_the_c_api() {
         assert_eq!(lumi_context_caps(ctx, &mut caps), LUMI_STATUS_OK);
         assert!(caps.external_memory);
         assert_eq!(lumi_context_caps(ctx, ptr::null_mut()), LUMI_STATUS_NULL_POINTER);
+        // Naming the same device by its UUID opens it.
+        let mut by_uuid = lumi_context_desc_default();
+        by_uuid.has_device_uuid = true;
+        by_uuid.device_uuid = caps.device_uuid;
+        let mut ctx2: *mut lumi_context = ptr::null_mut();
+        assert_eq!(lumi_context_create(&by_uuid, &mut ctx2), LUMI_STATUS_OK, "{}", last_error());
+        let mut caps2: lumi_device_caps = std::mem::zeroed();
+        assert_eq!(lumi_context_caps(ctx2, &mut caps2), LUMI_STATUS_OK);
+        assert_eq!(caps2.device_uuid, caps.device_uuid);
+        lumi_context_destroy(ctx2);
 
         // Loading: missing file, malformed file, good file.
         let mut lum: lumi_luminaire = 0;
