@@ -276,6 +276,9 @@ typedef struct lumi_export {
   uint32_t gl_layout;
   // `VkImageUsageFlags` the image was created with (a Vulkan host creates its image with the same).
   uint32_t vk_usage;
+  // `memoryTypeIndex` of the exported allocation; a Vulkan host allocates its import with the same
+  // index (VUID-VkMemoryAllocateInfo-allocationSize-01742). GL hosts ignore it.
+  uint32_t vk_memory_type_index;
   // Width in pixels.
   uint32_t width;
   // Height in pixels.
@@ -500,7 +503,8 @@ lumi_status lumi_render(struct lumi_context *ctx,
                         const struct lumi_camera *cam,
                         const struct lumi_render_options *opts);
 
-// A default target: 1280 × 720, RGBA16F, R32F depth, exportable.
+// A default target: 1280 × 720, RGBA32F (half float overflows above 65,504 cd/m², which many
+// luminaires exceed), R32F depth, exportable.
 struct lumi_target_desc lumi_target_desc_default(void);
 
 // Creates a render target. `out` is written only on success.

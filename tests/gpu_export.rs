@@ -135,7 +135,13 @@ impl VulkanHost {
                 .allocate_memory(
                     &vk::MemoryAllocateInfo::default()
                         .allocation_size(e.allocation_size)
-                        .memory_type_index(self.memory_type(req.memory_type_bits, vk::MemoryPropertyFlags::empty()))
+                        .memory_type_index({
+                            assert!(
+                                req.memory_type_bits & (1 << e.memory_type_index) != 0,
+                                "exporter's memory type fits"
+                            );
+                            e.memory_type_index
+                        })
                         .push_next(&mut import)
                         .push_next(&mut dedicated),
                     None,

@@ -77,6 +77,9 @@ pub struct lumi_export {
     pub gl_layout: u32,
     /// `VkImageUsageFlags` the image was created with (a Vulkan host creates its image with the same).
     pub vk_usage: u32,
+    /// `memoryTypeIndex` of the exported allocation; a Vulkan host allocates its import with the same
+    /// index (VUID-VkMemoryAllocateInfo-allocationSize-01742). GL hosts ignore it.
+    pub vk_memory_type_index: u32,
     /// Width in pixels.
     pub width: u32,
     /// Height in pixels.
@@ -87,13 +90,14 @@ pub struct lumi_export {
     pub driver_uuid: [u8; 16],
 }
 
-/// A default target: 1280 × 720, RGBA16F, R32F depth, exportable.
+/// A default target: 1280 × 720, RGBA32F (half float overflows above 65,504 cd/m², which many
+/// luminaires exceed), R32F depth, exportable.
 #[no_mangle]
 pub extern "C" fn lumi_target_desc_default() -> lumi_target_desc {
     lumi_target_desc {
         width: 1280,
         height: 720,
-        color_format: LUMI_COLOR_RGBA16F,
+        color_format: LUMI_COLOR_RGBA32F,
         depth_format: LUMI_DEPTH_R32F,
         exportable: true,
     }
@@ -236,6 +240,7 @@ pub unsafe extern "C" fn lumi_target_export(
                     vk_layout: info.vk_layout,
                     gl_layout: LUMI_GL_LAYOUT_SHADER_READ_ONLY_EXT,
                     vk_usage: info.vk_usage,
+                    vk_memory_type_index: info.memory_type_index,
                     width: info.width,
                     height: info.height,
                     device_uuid: caps.device_uuid,

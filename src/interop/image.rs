@@ -32,6 +32,9 @@ pub struct ExportInfo {
     pub height: u32,
     /// `VkImageUsageFlags` the image was created with (a Vulkan host must import with the same).
     pub vk_usage: u32,
+    /// `memoryTypeIndex` of the exported allocation: a Vulkan host importing the fd must allocate
+    /// with the same index (same physical device, hence the same memory types).
+    pub memory_type_index: u32,
 }
 
 /// An exportable image wrapped as a wgpu texture. The memory lives until the wgpu texture is dropped
@@ -274,6 +277,7 @@ impl ExportableImage {
                     width,
                     height,
                     vk_usage: vk_usage.as_raw(),
+                    memory_type_index: type_index,
                 },
                 released: false,
             })

@@ -1,0 +1,48 @@
+/* The GLFW host's test checks: the illuminance probe (shader against lumi_instance_illuminance), the
+ * luminaire-pixel check (composited pixel against predictions from lumi_luminaire_sample and from a
+ * ray cast into the room), and the screenshot. Each prints one line and returns whether it passed. */
+#ifndef CHECKS_H
+#define CHECKS_H
+
+#include <stdbool.h>
+
+#include "gl_interop.h"
+#include "lumiview.h"
+#include "lv_math.h"
+#include "scene.h"
+
+/* The view the last frame was drawn with. */
+typedef struct frame_view {
+    float view[16], projection[16];
+    lv_vec3 eye;
+    int width, height; /* framebuffer, pixels */
+    float exposure;
+    bool half_float;   /* the colour target is RGBA16F (luminance above 65504 cd/m² overflows) */
+} frame_view;
+
+/* Tolerances. */
+#define PROBE_TOLERANCE 0.01
+#define PIXEL_TOLERANCE (2.0 / 255.0)
+
+/* E at world point p on an upward surface from the room's GLSL (scene_probe) against the library's
+ * lumi_instance_illuminance; passes within PROBE_TOLERANCE (relative). */
+bool check_probe(const scene *s, const lumi_context *ctx, lumi_instance inst, lv_vec3 p);
+
+/* Pixel (x, y), counted from the top-left like the screenshot, of the back buffer after compositing.
+ * Predicts the luminaire's value tonemap(L(C, γ) · exposure), (C, γ) the direction from its
+ * photometric centre to the eye (lumi_luminaire_sample), and the room's value along the pixel's ray
+ * (ray cast into the boxes; E from lumi_instance_illuminance plus the uniform indirect term;
+ * tonemap(ρ E / π · exposure)). Whichever is nearer (lumiview's depth at the pixel against the room
+ * hit's GL window depth) is expected; passes when every channel is within PIXEL_TOLERANCE of it, and
+ * — when the room is expected in front of the luminaire — the two predictions differ by more than
+ * 2 · PIXEL_TOLERANCE, so that the check can tell them apart. Also checks that lumiview's image
+ * registers with the host's projection: its alpha is > 0 where the host's matrices project two points
+ * of the opening (catches a flipped origin). */
+bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminaire lum, lumi_instance inst,
+                           const gl_imported *color, const gl_imported *depth, const frame_view *v, long x,
+                           long y);
+
+/* Reads the back buffer (bottom-up) and writes it top-down as an RGB PNG. */
+bool write_screenshot(const char *path, int width, int height);
+
+#endif /* CHECKS_H */
