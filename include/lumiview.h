@@ -249,6 +249,10 @@ typedef struct lumi_target_desc {
   // Create exportable images (needs `external_memory` in `lumi_device_caps`); false gives
   // read-back-only targets.
   bool exportable;
+  // Synchronise with the host on the GPU through two exported semaphores (needs
+  // `external_semaphore` in `lumi_device_caps`; `LUMI_STATUS_UNSUPPORTED` otherwise). Then
+  // `lumi_render` returns without waiting: see `lumi_target_export_semaphores`.
+  bool semaphores;
 } lumi_target_desc;
 
 // Everything a host needs to import one exported image.
@@ -550,6 +554,22 @@ lumi_status lumi_target_read_pixels(struct lumi_context *ctx,
                                     uint8_t *buffer,
                                     size_t buffer_len,
                                     size_t *written);
+
+// Exports a target's two semaphores (created with `desc.semaphores = true`) as new opaque fds owned
+// by the caller (a successful `glImportSemaphoreFdEXT` / `vkImportSemaphoreFdKHR` takes them).
+//
+// Contract per frame: `lumi_render` submits a frame that signals `render_done`; the host waits on
+// `render_done` (GL: `glWaitSemaphoreEXT` with source layout `GL_LAYOUT_SHADER_READ_ONLY_EXT`) before
+// reading, and signals `host_done` (GL: `glSignalSemaphoreEXT`, destination layout
+// `GL_LAYOUT_SHADER_READ_ONLY_EXT`) after its reads, exactly once per frame; every `lumi_render`
+// after the first waits on `host_done` on the GPU. Neither side waits on the CPU.
+//
+// # Safety
+// `ctx` is a live context; `render_done_fd` and `host_done_fd` writable (written only on success).
+lumi_status lumi_target_export_semaphores(struct lumi_context *ctx,
+                                          lumi_target target,
+                                          int32_t *render_done_fd,
+                                          int32_t *host_done_fd);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -105,7 +105,12 @@ fn lifecycle_errors_and_a_render_through_the_c_api() {
         by_uuid.has_device_uuid = true;
         by_uuid.device_uuid = caps.device_uuid;
         let mut ctx2: *mut lumi_context = ptr::null_mut();
-        assert_eq!(lumi_context_create(&by_uuid, &mut ctx2), LUMI_STATUS_OK, "{}", last_error());
+        assert_eq!(
+            lumi_context_create(&by_uuid, &mut ctx2),
+            LUMI_STATUS_OK,
+            "{}",
+            last_error()
+        );
         let mut caps2: lumi_device_caps = std::mem::zeroed();
         assert_eq!(lumi_context_caps(ctx2, &mut caps2), LUMI_STATUS_OK);
         assert_eq!(caps2.device_uuid, caps.device_uuid);
@@ -255,8 +260,21 @@ fn lifecycle_errors_and_a_render_through_the_c_api() {
             LUMI_STATUS_INVALID_ARGUMENT
         );
         assert_eq!(target, 3);
+        if !caps.external_semaphore {
+            // lavapipe: no exported semaphores, a clear UNSUPPORTED (the CPU-wait contract applies).
+            let mut sem = tdesc;
+            sem.semaphores = true;
+            assert_eq!(lumi_target_create(ctx, &sem, &mut target), LUMI_STATUS_UNSUPPORTED);
+            assert!(last_error().contains("external_semaphore"), "{}", last_error());
+        }
         tdesc.color_format = LUMI_COLOR_RGBA32F;
         assert_eq!(lumi_target_create(ctx, &tdesc, &mut target), LUMI_STATUS_OK);
+        let (mut fa, mut fb) = (-3, -3);
+        assert_eq!(
+            lumi_target_export_semaphores(ctx, target, &mut fa, &mut fb),
+            LUMI_STATUS_INVALID_ARGUMENT
+        );
+        assert_eq!((fa, fb), (-3, -3));
 
         // Read-back before a render is an error.
         let mut px = vec![0u8; 65 * 65 * 16];

@@ -361,6 +361,7 @@ fn every_format_imports_into_a_second_vulkan_device_exactly() {
                 color,
                 depth,
                 exportable: true,
+                semaphores: false,
             };
             let mut t = RenderTarget::new(&r.ctx, &desc).unwrap();
             let opts = if color == ColorFormat::Rgba8Srgb {

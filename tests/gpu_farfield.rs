@@ -51,6 +51,7 @@ fn centre_pixel_shows_l_of_the_view_direction() {
             color: ColorFormat::Rgba32Float,
             depth: DepthFormat::R32Float,
             exportable: true,
+            semaphores: false,
         },
     )
     .unwrap();
@@ -101,6 +102,7 @@ fn tone_mapped_rgba8_matches_reinhard() {
             color: ColorFormat::Rgba8Srgb,
             depth: DepthFormat::None,
             exportable: false,
+            semaphores: false,
         },
     )
     .unwrap();
@@ -149,6 +151,7 @@ fn nearer_instance_occludes_and_bottom_left_origin_flips_rows() {
             color: ColorFormat::Rgba16Float,
             depth: DepthFormat::Depth32Float,
             exportable: true,
+            semaphores: false,
         },
     )
     .unwrap();
@@ -205,6 +208,7 @@ fn overlays_draw_lines_outside_the_opening() {
             color: ColorFormat::Rgba8Srgb,
             depth: DepthFormat::None,
             exportable: false,
+            semaphores: false,
         },
     )
     .unwrap();

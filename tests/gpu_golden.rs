@@ -74,6 +74,7 @@ fn check(name: &str, p: Arc<Photometry>, c: f64, g: f64, dist: f32, overlays: Ov
             color: ColorFormat::Rgba8Srgb,
             depth: DepthFormat::None,
             exportable: true,
+            semaphores: false,
         },
     )
     .unwrap();

@@ -48,6 +48,10 @@ pub struct lumi_target_desc {
     /// Create exportable images (needs `external_memory` in `lumi_device_caps`); false gives
     /// read-back-only targets.
     pub exportable: bool,
+    /// Synchronise with the host on the GPU through two exported semaphores (needs
+    /// `external_semaphore` in `lumi_device_caps`; `LUMI_STATUS_UNSUPPORTED` otherwise). Then
+    /// `lumi_render` returns without waiting: see `lumi_target_export_semaphores`.
+    pub semaphores: bool,
 }
 
 /// Everything a host needs to import one exported image.
@@ -100,6 +104,7 @@ pub extern "C" fn lumi_target_desc_default() -> lumi_target_desc {
         color_format: LUMI_COLOR_RGBA32F,
         depth_format: LUMI_DEPTH_R32F,
         exportable: true,
+        semaphores: false,
     }
 }
 
@@ -163,6 +168,7 @@ pub unsafe extern "C" fn lumi_target_create(
                 color: color_format(d.color_format)?,
                 depth: depth_format(d.depth_format)?,
                 exportable: d.exportable,
+                semaphores: d.semaphores,
             };
             let t = RenderTarget::new(&c.renderer.ctx, &td)?;
             let id = c.next_target;
@@ -296,6 +302,45 @@ pub unsafe extern "C" fn lumi_target_read_pixels(
             let data = t.read(&renderer.ctx, which)?;
             std::ptr::copy_nonoverlapping(data.as_ptr(), buffer, data.len());
             write_out(written, data.len());
+            Ok(())
+        })
+    }
+}
+
+/// Exports a target's two semaphores (created with `desc.semaphores = true`) as new opaque fds owned
+/// by the caller (a successful `glImportSemaphoreFdEXT` / `vkImportSemaphoreFdKHR` takes them).
+///
+/// Contract per frame: `lumi_render` submits a frame that signals `render_done`; the host waits on
+/// `render_done` (GL: `glWaitSemaphoreEXT` with source layout `GL_LAYOUT_SHADER_READ_ONLY_EXT`) before
+/// reading, and signals `host_done` (GL: `glSignalSemaphoreEXT`, destination layout
+/// `GL_LAYOUT_SHADER_READ_ONLY_EXT`) after its reads, exactly once per frame; every `lumi_render`
+/// after the first waits on `host_done` on the GPU. Neither side waits on the CPU.
+///
+/// # Safety
+/// `ctx` is a live context; `render_done_fd` and `host_done_fd` writable (written only on success).
+#[no_mangle]
+pub unsafe extern "C" fn lumi_target_export_semaphores(
+    ctx: *mut lumi_context,
+    target: lumi_target,
+    render_done_fd: *mut i32,
+    host_done_fd: *mut i32,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_target_export_semaphores", ctx, |c| {
+            if render_done_fd.is_null() {
+                return Err(FfiError::null("render_done_fd"));
+            }
+            if host_done_fd.is_null() {
+                return Err(FfiError::null("host_done_fd"));
+            }
+            let t = c
+                .targets
+                .get(&target)
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            let (a, b) = t.export_semaphores()?;
+            write_out(render_done_fd, a.into_raw_fd());
+            write_out(host_done_fd, b.into_raw_fd());
             Ok(())
         })
     }

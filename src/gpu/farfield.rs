@@ -543,11 +543,23 @@ impl FarfieldPass {
         for e in target.exportables_mut() {
             cbs.push(e.encode_release(&ctx.device, family));
         }
+        if let Some(sem) = &target.semaphores {
+            // GPU-side contract: wait for the host's reads of the previous frame, signal this one's end.
+            if target.frames > 0 {
+                sem.host_done.wait_on_next_submit(&ctx.queue);
+            }
+            sem.render_done.signal_on_next_submit(&ctx.queue);
+        }
         ctx.scoped("rendering a frame", || {
             ctx.queue.submit(cbs);
             Ok(())
         })?;
-        ctx.wait_idle()?;
+        if target.semaphores.is_some() {
+            let _ = ctx.device.poll(wgpu::PollType::Poll);
+            ctx.check()?;
+        } else {
+            ctx.wait_idle()?;
+        }
         for e in target.exportables_mut() {
             e.released = true;
         }

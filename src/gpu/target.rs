@@ -6,7 +6,16 @@ use std::os::fd::OwnedFd;
 
 use super::context::GpuContext;
 use super::GpuError;
-use crate::interop::{ExportInfo, ExportableImage};
+use crate::interop::{ExportInfo, ExportableImage, ExportableSemaphore};
+
+/// The two semaphores of a target synchronised on the GPU.
+#[derive(Debug)]
+pub struct TargetSemaphores {
+    /// Signalled by each frame's submission; the host waits on it before reading.
+    pub render_done: ExportableSemaphore,
+    /// Signalled by the host after its reads; the next frame waits on it before writing.
+    pub host_done: ExportableSemaphore,
+}
 
 /// Colour formats of a target.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -97,6 +106,9 @@ pub struct TargetDesc {
     pub depth: DepthFormat,
     /// Create exportable images (requires external memory); otherwise plain textures (read-back only).
     pub exportable: bool,
+    /// Synchronise with the host through two exported semaphores instead of waiting on the CPU
+    /// (requires `VK_KHR_external_semaphore_fd`; docs/interop.md).
+    pub semaphores: bool,
 }
 
 /// Largest target side in pixels.
@@ -128,6 +140,8 @@ pub struct RenderTarget {
     pub(crate) depth: Image,
     /// Number of frames rendered into it.
     pub frames: u64,
+    /// GPU-side synchronisation with the host, when asked for.
+    pub semaphores: Option<TargetSemaphores>,
 }
 
 impl RenderTarget {
@@ -138,6 +152,18 @@ impl RenderTarget {
                 "width/height",
                 format!("{}×{} is outside 1…{MAX_TARGET_SIZE}", desc.width, desc.height),
             ));
+        }
+        if desc.semaphores && !desc.exportable {
+            return Err(GpuError::invalid(
+                "semaphores",
+                "semaphores synchronise exported images: set exportable too",
+            ));
+        }
+        if desc.semaphores && !ctx.caps.external_semaphore {
+            return Err(GpuError::Unsupported(format!(
+                "the device ({}) has no VK_KHR_external_semaphore_fd: use the CPU-wait contract (semaphores = false)",
+                ctx.caps.adapter_name
+            )));
         }
         if desc.exportable && !ctx.caps.external_memory {
             return Err(GpuError::Unsupported(format!(
@@ -189,12 +215,21 @@ impl RenderTarget {
                 wgpu::TextureFormat::Depth32Float,
                 desc.exportable && desc.depth == DepthFormat::Depth32Float,
             )?;
+            let semaphores = if desc.semaphores {
+                Some(TargetSemaphores {
+                    render_done: ExportableSemaphore::new(&ctx.adapter, &ctx.device)?,
+                    host_done: ExportableSemaphore::new(&ctx.adapter, &ctx.device)?,
+                })
+            } else {
+                None
+            };
             Ok(RenderTarget {
                 desc: *desc,
                 color,
                 depth_copy,
                 depth,
                 frames: 0,
+                semaphores,
             })
         })
     }
@@ -240,6 +275,15 @@ impl RenderTarget {
                 "the target was created with exportable = false".into(),
             )),
         }
+    }
+
+    /// Exports the target's semaphores as new opaque fds (render_done, host_done), owned by the caller.
+    pub fn export_semaphores(&self) -> Result<(OwnedFd, OwnedFd), GpuError> {
+        let s = self
+            .semaphores
+            .as_ref()
+            .ok_or_else(|| GpuError::invalid("target", "the target was created without semaphores"))?;
+        Ok((s.render_done.export_fd()?, s.host_done.export_fd()?))
     }
 
     /// Bytes per pixel of `which` as read back.

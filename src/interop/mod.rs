@@ -6,15 +6,20 @@
 //! - [`image`]: exportable images (dedicated allocation, optimal tiling, opaque fd) wrapped as wgpu
 //!   textures; fd export; queue-family release/acquire barriers around each frame.
 //!
+//! - [`semaphore`]: exportable binary semaphores for GPU-side synchronisation where the driver has
+//!   `VK_KHR_external_semaphore_fd`.
+//!
 //! The synchronisation contract is written in docs/interop.md: without exported semaphores (Mesa
 //! lavapipe) a render returns only after the GPU finished, and the host must finish its reads of a
 //! target before the next render into it.
 
 pub mod device;
 pub mod image;
+pub mod semaphore;
 
 pub use device::{open_device, DeviceCaps, OpenedDevice};
 pub use image::{ExportInfo, ExportableImage};
+pub use semaphore::ExportableSemaphore;
 
 /// An error of the Vulkan interop layer.
 #[derive(Debug, thiserror::Error)]

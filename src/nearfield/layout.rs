@@ -117,11 +117,8 @@ pub fn directions(layout: &Layout, seed: u64) -> Result<Vec<(DVec3, Hemisphere)>
             if !(0.0..=30.0).contains(&overlap_deg) || !(0.0..=5.0).contains(&jitter_deg) {
                 return Err(NearfieldError::invalid("rigo", "overlap must be 0…30° and jitter 0…5°"));
             }
-            let span = 90.0 + overlap_deg;
-            // Square cells at the equator: meridians · rows = N, 360/meridians = span/rows.
-            let meridians = ((per_hemisphere as f64 * 360.0 / span).sqrt().round() as usize).max(3);
-            let rows = (per_hemisphere / meridians).max(2);
-            let dtheta = span / rows as f64;
+            let (meridians, rows) = rigo_dims(per_hemisphere, overlap_deg);
+            let dtheta = (90.0 + overlap_deg) / rows as f64;
             let mut rng = SplitMix64::new(seed);
             let mut out = Vec::with_capacity(2 * meridians * rows);
             for (h, sign) in [(Hemisphere::Lower, 1.0), (Hemisphere::Upper, -1.0)] {
@@ -144,6 +141,15 @@ pub fn directions(layout: &Layout, seed: u64) -> Result<Vec<(DVec3, Hemisphere)>
     }
 }
 
+/// Meridians and rows per hemisphere of a `rigo` layout: square cells at the equator
+/// (meridians · rows ≈ N, 360°/meridians = (90° + overlap)/rows).
+fn rigo_dims(per_hemisphere: usize, overlap_deg: f64) -> (usize, usize) {
+    let span = 90.0 + overlap_deg;
+    let meridians = ((per_hemisphere as f64 * 360.0 / span).sqrt().round() as usize).max(3);
+    let rows = (per_hemisphere / meridians).max(2);
+    (meridians, rows)
+}
+
 fn check_count(name: &str, n: usize) -> Result<()> {
     if n == 0 || n > MAX_CAMERAS {
         return Err(NearfieldError::invalid(name, format!("{n} is outside 1…{MAX_CAMERAS}")));
@@ -152,12 +158,36 @@ fn check_count(name: &str, n: usize) -> Result<()> {
 }
 
 /// Cameras on `sphere` for a layout, each looking at the centre, labelled `cam N`.
+///
+/// In a `rigo` layout every meridian starts at the pole, and, as on a real goniophotometer, the
+/// camera there is turned about its optical axis with its meridian: its `down` axis points along the
+/// meridian's azimuth φ, so the pole cameras share a position but not an orientation.
 pub fn cameras(sphere: &CaptureSphere, layout: &Layout, seed: u64) -> Result<Vec<Camera>> {
-    Ok(directions(layout, seed)?
+    let mut cams: Vec<Camera> = directions(layout, seed)?
         .into_iter()
         .enumerate()
         .map(|(i, (d, h))| Camera::on_sphere(sphere, d, h, format!("cam {i}")))
-        .collect())
+        .collect();
+    if let Layout::Rigo {
+        per_hemisphere,
+        overlap_deg,
+        ..
+    } = *layout
+    {
+        let (meridians, rows) = rigo_dims(per_hemisphere, overlap_deg);
+        for (i, c) in cams.iter_mut().enumerate() {
+            if i % rows != 0 {
+                continue;
+            }
+            let m = (i / rows) % meridians;
+            let phi = (360.0 * m as f64 / meridians as f64).to_radians();
+            let down = DVec3::new(phi.cos(), phi.sin(), 0.0);
+            let forward = c.forward;
+            c.down = (down - forward * forward.dot(down)).normalize();
+            c.right = c.down.cross(forward).normalize();
+        }
+    }
+    Ok(cams)
 }
 
 #[cfg(test)]
@@ -179,6 +209,29 @@ mod tests {
         // Overlap: some lower-hemisphere cameras sit above the equator.
         assert!(a.iter().any(|(d, h)| *h == Hemisphere::Lower && d.z > 0.01));
         assert!(a.iter().all(|(d, _)| (d.length() - 1.0).abs() < 1e-12));
+    }
+
+    #[test]
+    fn rigo_pole_cameras_share_a_position_but_turn_with_their_meridian() {
+        let sphere = CaptureSphere {
+            centre_m: DVec3::ZERO,
+            radius_m: 1.0,
+        };
+        let l = Layout::Rigo {
+            per_hemisphere: 400,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        };
+        let cams = cameras(&sphere, &l, 1).unwrap();
+        let poles: Vec<&Camera> = cams.iter().filter(|c| c.position_m.z < -0.999_999).collect();
+        assert!(poles.len() > 3);
+        for c in &cams {
+            c.validate().unwrap();
+        }
+        for pair in poles.windows(2) {
+            assert!((pair[0].position_m - pair[1].position_m).length() < 1e-12);
+            assert!((pair[0].down - pair[1].down).length() > 1e-3, "orientations differ");
+        }
     }
 
     #[test]
