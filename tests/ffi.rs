@@ -2,6 +2,8 @@
 //! untouched on error, destroy(NULL), use after a failed create, buffer sizes, and a render through
 //! the C API whose centre pixel is the library's own L(C, γ).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod gpu_common;
 
 use std::ffi::{c_char, CStr, CString};

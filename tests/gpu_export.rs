@@ -2,6 +2,8 @@
 //! into a second Vulkan device created here with ash (the "Vulkan host"), copied out and compared
 //! byte for byte with the library's own read-back — through several frames of one import.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod gpu_common;
 
 use std::os::fd::IntoRawFd;

@@ -2,6 +2,8 @@
 //! pixels, depth in the host's convention, occlusion between instances, overlays, read-back formats.
 //! In CI (CI=true) a missing adapter fails; locally the tests print why they skip.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod gpu_common;
 
 use glam::{Mat4, Vec3};

@@ -8,6 +8,8 @@
 //! and a difference image under target/golden-failures/. Bless after an intended change with
 //! `LUMIVIEW_BLESS=1 cargo test --test gpu_golden` (on lavapipe, never on a developer's GPU).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
 mod gpu_common;
 
 use std::path::{Path, PathBuf};
@@ -45,7 +47,7 @@ fn srgb8(v: f64) -> u8 {
 fn camera_at(c_deg: f64, gamma_deg: f64, distance_m: f32) -> (HostCamera, [f64; 3]) {
     let d = photometry::web::direction(c_deg, gamma_deg);
     let eye = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * distance_m;
-    let up = if gamma_deg < 1.0 || gamma_deg > 179.0 {
+    let up = if !(1.0..=179.0).contains(&gamma_deg) {
         Vec3::X
     } else {
         Vec3::Z

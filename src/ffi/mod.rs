@@ -4,7 +4,7 @@
 //! - Out-parameters are written only on success.
 //! - The last error's text is thread-local and *copied* into a caller buffer with
 //!   [`lumi_last_error`]; it is never returned as a borrowed pointer.
-//! - Every exported body runs inside [`boundary`] (catch_unwind): a panic becomes
+//! - Every exported body runs inside `boundary` (catch_unwind): a panic becomes
 //!   `LUMI_STATUS_PANIC` and poisons the context it happened in.
 //! - Enums arrive as `uint32_t` and are converted with `TryFrom`; an unknown value is
 //!   `LUMI_STATUS_INVALID_ARGUMENT`.

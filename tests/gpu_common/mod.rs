@@ -1,6 +1,6 @@
 //! Shared set-up of the GPU tests: one renderer per test, tests serialised (2 cores, one GPU),
 //! CI=true turns a missing adapter into a failure.
-#![allow(dead_code)]
+#![allow(dead_code, clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
