@@ -1,9 +1,16 @@
 //! Near-field scans (pure CPU): ray-image sets, importers, the synthetic goniophotometer, camera
 //! layouts and the tiled `.lvpack` store.
 
+pub mod binning;
+pub mod coverage;
 pub mod error;
+pub mod images;
 pub mod layout;
+pub mod manifest;
+pub mod pack;
 pub mod rayset;
+pub mod synth;
+pub mod tm25;
 
 pub use error::NearfieldError;
 pub use rayset::{

@@ -38,6 +38,9 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// For an .lvpack: read every page and check its checksum (and that padding is zero).
+        #[arg(long)]
+        verify: bool,
         #[command(flatten)]
         load: LoadArgs,
     },
@@ -78,12 +81,34 @@ enum Command {
     Solid(commands::SolidArgs),
     /// Write the polar intensity diagram (C0–C180 and C90–C270 planes) as .svg or .png.
     Plot(commands::PlotArgs),
+    /// Render a still of the luminaire's appearance on the GPU (Vulkan): .png tone-mapped or .exr in cd/m².
+    Render(commands::RenderArgs),
+    /// Where a near-field scan's cameras sit and how well they cover the sphere: cameras per
+    /// hemisphere, coincident positions, angle to the nearest camera (median, 95 %, max); -o writes
+    /// a PNG (positions on equal-area discs, map of the nearest-camera angle).
+    Cameras(commands::CamerasArgs),
+    /// Bin an IES TM-25 ray file into the luminance images of a virtual near-field scan (cameras on
+    /// a capture sphere) and write it as a scan (manifest + images); prints rays per camera and per
+    /// lit pixel.
+    Rays2scan(commands::Rays2scanArgs),
+    /// Synthetic goniophotometer: analytic luminaires with exact photometry; write a scan, the proxy
+    /// mesh or an orthographic ground-truth view (docs/synthetic.md).
+    Synth(commands::SynthArgs),
+    /// Store a near-field scan as a tiled .lvpack file (only tiles with signal, fp16 × per-tile
+    /// scale within 0.05 %, pages ≤ 128 MiB): from scan manifests, --synth, a TM-25 ray file or
+    /// another .lvpack.
+    Pack(commands::PackArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info { file, json, load } => commands::info(&file, json, &load),
+        Command::Info {
+            file,
+            json,
+            verify,
+            load,
+        } => commands::info(&file, json, verify, &load),
         Command::Sample { file, at, json, load } => commands::sample(&file, &at, json, &load),
         Command::Luminance {
             file,
@@ -95,6 +120,11 @@ fn main() -> ExitCode {
         Command::Lut(args) => commands::lut(&args),
         Command::Solid(args) => commands::solid(&args),
         Command::Plot(args) => commands::plot(&args),
+        Command::Render(args) => commands::render(&args),
+        Command::Cameras(args) => commands::cameras(&args),
+        Command::Rays2scan(args) => commands::rays2scan(&args),
+        Command::Synth(args) => commands::synth(&args),
+        Command::Pack(args) => commands::pack(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,19 +1,27 @@
 //! The subcommands. Each returns an error whose text names the file or argument at fault.
 
+mod cameras;
 mod lut;
 mod pack;
 mod plot;
 mod rays;
+mod render;
 mod solid;
+mod synth;
 
 use std::path::Path;
 
 use lumiview::photometry::{self, LoadOptions, Photometry};
 use serde_json::json;
 
+pub use cameras::{cameras, CamerasArgs};
 pub use lut::{lut, LutArgs};
+pub use pack::{pack, PackArgs};
 pub use plot::{plot, PlotArgs};
+pub use rays::{rays2scan, Rays2scanArgs};
+pub use render::{render, RenderArgs};
 pub use solid::{solid, SolidArgs};
+pub use synth::{synth, SynthArgs};
 
 use crate::LoadArgs;
 
@@ -31,7 +39,9 @@ enum FileKind {
 fn detect_kind(file: &Path) -> FileKind {
     use std::io::Read as _;
     let mut magic = [0u8; 8];
-    let n = std::fs::File::open(file).and_then(|mut f| f.read(&mut magic)).unwrap_or(0);
+    let n = std::fs::File::open(file)
+        .and_then(|mut f| f.read(&mut magic))
+        .unwrap_or(0);
     if n >= 4 && &magic[..4] == b"TM25" {
         FileKind::RayFile
     } else if n >= 6 && &magic[..6] == b"LVPACK" {
@@ -132,12 +142,16 @@ fn fmt_num(v: f64) -> String {
     }
 }
 
-/// `lumiview info`.
-pub fn info(file: &Path, as_json: bool, args: &LoadArgs) -> CliResult {
-    match detect_kind(file) {
+/// `lumiview info`; `verify` (`--verify`) checks every page of a `.lvpack`.
+pub fn info(file: &Path, as_json: bool, verify: bool, args: &LoadArgs) -> CliResult {
+    let kind = detect_kind(file);
+    if verify && !matches!(kind, FileKind::Pack) {
+        return Err(format!("{}: --verify applies to .lvpack files", file.display()).into());
+    }
+    match kind {
         FileKind::Photometry => {}
         FileKind::RayFile => return rays::info_rayfile(file, as_json),
-        FileKind::Pack => return pack::info_pack(file, as_json),
+        FileKind::Pack => return pack::info_pack(file, as_json, verify),
     }
     let mut out = String::new();
     let p = load(file, args)?;

@@ -109,6 +109,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
             color,
             depth: DepthFormat::None,
             exportable: false,
+            semaphores: false,
         },
     )?;
     let d = direction(c, g);

@@ -1,0 +1,259 @@
+//! Benchmark of the `.lvpack` store, run by `scripts/bench-pack` (which prints the table).
+//!
+//! ```text
+//! bench_pack footprint  [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc] --out FILE
+//! bench_pack throughput --images N [--size 1216x1021] [--luminaire disc] --dir DIR
+//! ```
+//!
+//! `footprint` renders a synthetic scan (the synthetic goniophotometer; `--images N` takes N cameras
+//! spread evenly over the layout) and streams it into a pack; `throughput` writes N `.pf` files once
+//! (manifest + images), then times a plain parallel read-and-sum pass over them, packing them from
+//! the manifest, a second read pass and a CSR encoding pass. Each prints one JSON object, with the
+//! process's peak resident memory (VmHWM) at the end.
+
+use std::error::Error;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde_json::json;
+
+use lumiview::nearfield::error::Result as NfResult;
+use lumiview::nearfield::images::read_image;
+use lumiview::nearfield::layout::Layout;
+use lumiview::nearfield::manifest::{load_scan, write_scan, ImportOptions};
+use lumiview::nearfield::pack::{write_pack, CsrImage, PackOptions, PackStats};
+use lumiview::nearfield::synth::{synth_scan, SynthOptions};
+use lumiview::nearfield::{ImageSource, LuminanceImage, Scan};
+
+type Res<T> = std::result::Result<T, Box<dyn Error>>;
+
+/// Every `k`-th camera of a scan, so a short run keeps the full layout's mix of views.
+struct Subset {
+    inner: Box<dyn ImageSource>,
+    index: Vec<usize>,
+}
+
+impl ImageSource for Subset {
+    fn image(&self, i: usize) -> NfResult<LuminanceImage> {
+        self.inner.image(self.index[i])
+    }
+}
+
+fn subset(scan: Scan, n: Option<usize>) -> Scan {
+    let total = scan.set.cameras.len();
+    let Some(n) = n.filter(|&n| n < total && n > 0) else {
+        return scan;
+    };
+    let index: Vec<usize> = (0..n).map(|i| i * total / n).collect();
+    let mut set = scan.set;
+    set.cameras = index.iter().map(|&i| set.cameras[i].clone()).collect();
+    Scan {
+        set,
+        source: Box::new(Subset {
+            inner: scan.source,
+            index,
+        }),
+    }
+}
+
+struct Args {
+    mode: String,
+    layout: String,
+    images: Option<usize>,
+    size: (u32, u32),
+    luminaire: String,
+    out: Option<PathBuf>,
+    dir: Option<PathBuf>,
+}
+
+fn parse_args() -> Res<Args> {
+    let mut it = std::env::args().skip(1);
+    let mode = it.next().ok_or("usage: bench_pack footprint|throughput [options]")?;
+    let mut a = Args {
+        mode,
+        layout: "rigo:28000".into(),
+        images: None,
+        size: (1216, 1021),
+        luminaire: "disc".into(),
+        out: None,
+        dir: None,
+    };
+    while let Some(k) = it.next() {
+        let v = it.next().ok_or_else(|| format!("{k} needs a value"))?;
+        match k.as_str() {
+            "--layout" => a.layout = v,
+            "--images" => a.images = Some(v.parse()?),
+            "--size" => {
+                let (w, h) = v.split_once('x').ok_or("--size WxH")?;
+                a.size = (w.parse()?, h.parse()?);
+            }
+            "--luminaire" => a.luminaire = v,
+            "--out" => a.out = Some(v.into()),
+            "--dir" => a.dir = Some(v.into()),
+            _ => return Err(format!("unknown option {k}").into()),
+        }
+    }
+    Ok(a)
+}
+
+fn layout(text: &str) -> Res<Layout> {
+    let (kind, n) = text.split_once(':').ok_or("--layout KIND:N")?;
+    let n: usize = n.parse()?;
+    Ok(match kind {
+        "rigo" => Layout::Rigo {
+            per_hemisphere: n,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        },
+        "fibonacci" => Layout::Fibonacci { count: n },
+        _ => return Err(format!("unknown layout {kind}").into()),
+    })
+}
+
+fn synth(a: &Args) -> Res<Scan> {
+    let opts = SynthOptions {
+        luminaire: a.luminaire.clone(),
+        layout: layout(&a.layout)?,
+        size: a.size,
+        ..SynthOptions::default()
+    };
+    Ok(subset(synth_scan(&opts)?, a.images))
+}
+
+/// Peak resident set size of this process in KiB (VmHWM), 0 when unknown.
+fn vm_hwm_kib() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1)?.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+fn stats_json(s: &PackStats, secs: f64) -> serde_json::Value {
+    json!({
+        "images": s.images, "tiles_kept": s.tiles_kept, "tiles_f32": s.tiles_f32, "pages": s.pages,
+        "bytes": s.bytes, "pool_bytes": s.pool_bytes, "tile_table_bytes": s.tile_table_bytes,
+        "pixels": s.pixels, "pixels_kept": s.pixels_kept,
+        "dense_f16_bytes": s.dense_f16_bytes, "csr_bytes": s.csr_bytes,
+        "ratio_to_dense_f16": s.ratio_to_dense_f16(), "ratio_to_csr": s.ratio_to_csr(),
+        "peak_pending_images": s.peak_pending_images, "peak_pending_bytes": s.peak_pending_bytes,
+        "pack_s": secs, "images_per_s": s.images as f64 / secs,
+        "mpx_per_s": s.pixels as f64 / secs / 1e6,
+    })
+}
+
+fn progress(label: &'static str) -> impl Fn(usize, usize) + Sync {
+    move |done, total| {
+        if done % 2000 == 0 || done == total {
+            eprintln!("bench_pack: {label}: {done}/{total}");
+        }
+    }
+}
+
+fn footprint(a: &Args) -> Res<serde_json::Value> {
+    let out = a.out.clone().ok_or("--out FILE")?;
+    let scan = synth(a)?;
+    let t = Instant::now();
+    let stats = write_pack(&scan, &out, &PackOptions::default(), &progress("footprint"))?;
+    let mut v = stats_json(&stats, t.elapsed().as_secs_f64());
+    v["mode"] = json!("footprint");
+    v["layout"] = json!(a.layout);
+    v["size"] = json!([a.size.0, a.size.1]);
+    v["vm_hwm_kib"] = json!(vm_hwm_kib());
+    Ok(v)
+}
+
+/// Reads every image in parallel and sums its pixels (the baseline pass).
+fn read_pass(files: &[PathBuf]) -> Res<(f64, f64)> {
+    let t = Instant::now();
+    let sum = files
+        .par_iter()
+        .map(|f| Ok(read_image(f)?.data.iter().map(|&v| f64::from(v)).sum::<f64>()))
+        .collect::<NfResult<Vec<f64>>>()?
+        .into_iter()
+        .sum::<f64>();
+    Ok((t.elapsed().as_secs_f64(), sum))
+}
+
+fn throughput(a: &Args) -> Res<serde_json::Value> {
+    let dir = a.dir.clone().ok_or("--dir DIR")?;
+    let n = a.images.ok_or("--images N")?;
+    let manifest = dir.join("manifest.json");
+    let files: Vec<PathBuf> = {
+        let images = dir.join("images");
+        let mut f: Vec<PathBuf> = std::fs::read_dir(&images)
+            .map(|rd| rd.filter_map(|e| e.ok().map(|e| e.path())).collect())
+            .unwrap_or_default();
+        f.retain(|p| p.extension().is_some_and(|e| e == "pf"));
+        f.sort();
+        if f.len() != n || !manifest.exists() {
+            let _ = std::fs::remove_dir_all(&dir);
+            let scan = synth(a)?;
+            let t = Instant::now();
+            write_scan(&dir, &scan, &progress("writing .pf files"))?;
+            eprintln!("bench_pack: wrote {n} .pf files in {:.1} s", t.elapsed().as_secs_f64());
+            return throughput(a);
+        }
+        f
+    };
+    let (read1, sum) = read_pass(&files)?;
+    let scan = load_scan(std::slice::from_ref(&manifest), &ImportOptions::default())?;
+    let out = dir.join("bench.lvpack");
+    let t = Instant::now();
+    let stats = write_pack(&scan, &out, &PackOptions::default(), &|_, _| {})?;
+    let pack_s = t.elapsed().as_secs_f64();
+    let (read2, _) = read_pass(&files)?;
+    let t = Instant::now();
+    let csr: usize = files
+        .par_iter()
+        .map(|f| Ok(CsrImage::encode(&read_image(f)?)?.byte_len()))
+        .collect::<NfResult<Vec<usize>>>()?
+        .into_iter()
+        .sum();
+    let csr_s = t.elapsed().as_secs_f64();
+    let file_bytes: u64 = files
+        .iter()
+        .filter_map(|f| std::fs::metadata(f).ok())
+        .map(|m| m.len())
+        .sum();
+    let read = read1.min(read2);
+    let mut v = stats_json(&stats, pack_s);
+    v["mode"] = json!("throughput");
+    v["pf_bytes"] = json!(file_bytes);
+    v["read_s"] = json!([read1, read2]);
+    v["read_sum_cd_m2"] = json!(sum);
+    v["pack_over_read"] = json!(pack_s / read);
+    v["csr_encode_s"] = json!(csr_s);
+    v["csr_bytes_encoded"] = json!(csr);
+    v["threads"] = json!(rayon::current_num_threads());
+    v["vm_hwm_kib"] = json!(vm_hwm_kib());
+    if csr as u64 != stats.csr_bytes {
+        return Err(format!("CSR encoder gives {csr} bytes, the pack counted {}", stats.csr_bytes).into());
+    }
+    Ok(v)
+}
+
+fn main() -> ExitCode {
+    let run = || -> Res<()> {
+        let a = parse_args()?;
+        let v = match a.mode.as_str() {
+            "footprint" => footprint(&a)?,
+            "throughput" => throughput(&a)?,
+            m => return Err(format!("unknown mode {m}: footprint or throughput").into()),
+        };
+        println!("{v}");
+        Ok(())
+    };
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("bench_pack: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! Proxy meshes: triangles on the surfaces where a luminaire's luminance appears (its emitting planes,
+//! the reflector's aperture), for parallax-correct reprojection of near-field images. Written as glTF
+//! 2.0 binary (GLB) by hand, in the axes of `photometry::solid` (Y up: (x, y, z) → (x, z, −y)), one
+//! mesh primitive per named surface, front faces (counter-clockwise) on the emitting side.
+
+use std::path::Path;
+
+use glam::DVec3;
+use serde_json::json;
+
+use crate::nearfield::error::{NearfieldError, Result};
+use crate::photometry::solid::to_gltf_axes;
+
+/// One named surface of a proxy mesh (luminaire frame, metres).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ProxySurface {
+    /// Name (e.g. `front tile 3`, `back plane`, `aperture`).
+    pub name: String,
+    /// Vertex positions (m, luminaire frame).
+    pub positions: Vec<DVec3>,
+    /// Unit normals per vertex, pointing to the side the light leaves.
+    pub normals: Vec<DVec3>,
+    /// Triangles (three vertex indices each), counter-clockwise seen from the emitting side.
+    pub indices: Vec<u32>,
+}
+
+/// A luminaire's proxy geometry: named surfaces.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ProxyMesh {
+    /// The luminaire's name.
+    pub name: String,
+    /// The surfaces.
+    pub surfaces: Vec<ProxySurface>,
+}
+
+impl ProxyMesh {
+    /// An empty mesh for luminaire `name`.
+    pub fn new(name: &str) -> Self {
+        Self {
+            name: name.to_string(),
+            surfaces: Vec::new(),
+        }
+    }
+
+    /// Adds the rectangle [x0, x1] × [y0, y1] in the plane z, facing down (−Z).
+    pub fn add_rect(&mut self, name: &str, x0: f64, x1: f64, y0: f64, y1: f64, z: f64) {
+        self.surfaces.push(ProxySurface {
+            name: name.to_string(),
+            positions: vec![
+                DVec3::new(x0, y0, z),
+                DVec3::new(x0, y1, z),
+                DVec3::new(x1, y1, z),
+                DVec3::new(x1, y0, z),
+            ],
+            normals: vec![DVec3::NEG_Z; 4],
+            // (p1 − p0) × (p2 − p0) points along −Z for this order.
+            indices: vec![0, 1, 2, 0, 2, 3],
+        });
+    }
+
+    /// Adds a disc (an inscribed polygon of `segments` ≥ 3 sides) centred at `centre` in the plane
+    /// z = centre.z, facing down (−Z).
+    pub fn add_disc(&mut self, name: &str, centre: DVec3, radius: f64, segments: u32) {
+        let n = segments.max(3);
+        let mut positions = vec![centre];
+        for k in 0..n {
+            let a = std::f64::consts::TAU * f64::from(k) / f64::from(n);
+            positions.push(centre + DVec3::new(radius * a.cos(), radius * a.sin(), 0.0));
+        }
+        let mut indices = Vec::with_capacity(3 * n as usize);
+        for k in 0..n {
+            let (a, b) = (1 + k, 1 + (k + 1) % n);
+            indices.extend_from_slice(&[0, b, a]);
+        }
+        self.surfaces.push(ProxySurface {
+            name: name.to_string(),
+            normals: vec![DVec3::NEG_Z; positions.len()],
+            positions,
+            indices,
+        });
+    }
+
+    /// Total number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.surfaces.iter().map(|s| s.indices.len() / 3).sum()
+    }
+
+    /// The glTF 2.0 binary: one buffer; per surface a POSITION (with min/max), NORMAL and u32 index
+    /// accessor and a triangle primitive; one mesh, one node, one scene. `asset.extras` states the
+    /// luminaire and the frame.
+    ///
+    /// Errors: a surface whose indices point past its vertices, or a mesh over 4 GiB.
+    pub fn to_glb(&self) -> Result<Vec<u8>> {
+        let bad = |m: String| NearfieldError::invalid("proxy mesh", m);
+        let mut bin: Vec<u8> = Vec::new();
+        let mut accessors = Vec::new();
+        let mut views = Vec::new();
+        let mut primitives = Vec::new();
+        let push_view = |bin: &mut Vec<u8>, views: &mut Vec<serde_json::Value>, data: &[u8], target: u32| {
+            while bin.len() % 4 != 0 {
+                bin.push(0);
+            }
+            views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": data.len(), "target": target}));
+            bin.extend_from_slice(data);
+            views.len() - 1
+        };
+        for s in &self.surfaces {
+            if s.positions.len() != s.normals.len() || s.indices.len() % 3 != 0 {
+                return Err(bad(format!(
+                    "surface '{}': positions, normals and triangles do not match",
+                    s.name
+                )));
+            }
+            if let Some(i) = s.indices.iter().find(|&&i| i as usize >= s.positions.len()) {
+                return Err(bad(format!("surface '{}': index {i} past its vertices", s.name)));
+            }
+            let pos: Vec<[f32; 3]> = s
+                .positions
+                .iter()
+                .map(|p| to_gltf_axes([p.x as f32, p.y as f32, p.z as f32]))
+                .collect();
+            let nrm: Vec<[f32; 3]> = s
+                .normals
+                .iter()
+                .map(|p| to_gltf_axes([p.x as f32, p.y as f32, p.z as f32]))
+                .collect();
+            let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+            for p in &pos {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            let bytes = |v: &[[f32; 3]]| v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+            let pv = push_view(&mut bin, &mut views, &bytes(&pos), 34962);
+            let nv = push_view(&mut bin, &mut views, &bytes(&nrm), 34962);
+            let idx: Vec<u8> = s.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+            let iv = push_view(&mut bin, &mut views, &idx, 34963);
+            let a0 = accessors.len();
+            accessors.push(
+                json!({"bufferView": pv, "componentType": 5126, "count": pos.len(), "type": "VEC3",
+                "min": lo, "max": hi}),
+            );
+            accessors.push(json!({"bufferView": nv, "componentType": 5126, "count": nrm.len(), "type": "VEC3"}));
+            accessors
+                .push(json!({"bufferView": iv, "componentType": 5125, "count": s.indices.len(), "type": "SCALAR"}));
+            primitives.push(json!({
+                "attributes": {"POSITION": a0, "NORMAL": a0 + 1},
+                "indices": a0 + 2,
+                "mode": 4,
+                "extras": {"surface": s.name},
+            }));
+        }
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let doc = json!({
+            "asset": {
+                "version": "2.0",
+                "generator": "lumiview synth",
+                "extras": {
+                    "luminaire": self.name,
+                    "kind": "near-field proxy: surfaces where the luminance appears",
+                    "unit": "m",
+                    "frame": "glTF Y up; lumiview luminaire frame (Z up) rotated by -90 deg about X: \
+                              (x, y, z) -> (x, z, -y); nadir along -Y, C0 along +X, C90 along -Z",
+                },
+            },
+            "scene": 0,
+            "scenes": [{"nodes": [0]}],
+            "nodes": [{"mesh": 0, "name": self.name}],
+            "meshes": [{"name": self.name, "primitives": primitives}],
+            "accessors": accessors,
+            "bufferViews": views,
+            "buffers": [{"byteLength": bin.len()}],
+        });
+        let mut json_bytes = serde_json::to_vec(&doc).map_err(|e| bad(format!("cannot encode glTF JSON: {e}")))?;
+        while json_bytes.len() % 4 != 0 {
+            json_bytes.push(b' ');
+        }
+        let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
+        let too_big = || bad("the mesh is too large for a GLB file (4 GiB)".into());
+        let total32 = u32::try_from(total).map_err(|_| too_big())?;
+        let json_len = u32::try_from(json_bytes.len()).map_err(|_| too_big())?;
+        let bin_len = u32::try_from(bin.len()).map_err(|_| too_big())?;
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&total32.to_le_bytes());
+        out.extend_from_slice(&json_len.to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json_bytes);
+        out.extend_from_slice(&bin_len.to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&bin);
+        Ok(out)
+    }
+
+    /// Writes [`ProxyMesh::to_glb`] to `path`.
+    ///
+    /// Errors: as `to_glb`, or an I/O error naming `path`.
+    pub fn write_glb(&self, path: &Path) -> Result<()> {
+        let bytes = self.to_glb()?;
+        std::fs::write(path, bytes).map_err(|e| NearfieldError::io(path, e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rect_and_disc_face_down() {
+        let mut m = ProxyMesh::new("t");
+        m.add_rect("r", -1.0, 1.0, -0.5, 0.5, 0.0);
+        m.add_disc("d", DVec3::new(0.0, 0.0, 0.1), 0.2, 16);
+        assert_eq!(m.triangle_count(), 2 + 16);
+        for s in &m.surfaces {
+            for t in s.indices.chunks(3) {
+                let (a, b, c) = (
+                    s.positions[t[0] as usize],
+                    s.positions[t[1] as usize],
+                    s.positions[t[2] as usize],
+                );
+                assert!((b - a).cross(c - a).z < 0.0, "{}", s.name);
+            }
+        }
+        let glb = m.to_glb().unwrap();
+        assert_eq!(&glb[..4], b"glTF");
+        assert_eq!(glb.len() % 4, 0);
+    }
+
+    #[test]
+    fn bad_indices_are_errors() {
+        let mut m = ProxyMesh::new("t");
+        m.add_rect("r", 0.0, 1.0, 0.0, 1.0, 0.0);
+        m.surfaces[0].indices[2] = 9;
+        assert!(m.to_glb().is_err());
+    }
+}
