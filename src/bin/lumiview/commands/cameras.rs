@@ -68,6 +68,19 @@ pub fn load_ray_image_set(
     scan: &[PathBuf],
     import: &ScanImportArgs,
 ) -> Result<(RayImageSet, ImportReport), Box<dyn std::error::Error>> {
+    // A single `.lvpack` (magic "LVPACK") carries its cameras; otherwise manifests.
+    if let [one] = scan {
+        use std::io::Read as _;
+        let mut magic = [0u8; 6];
+        let is_pack = std::fs::File::open(one)
+            .and_then(|mut f| f.read_exact(&mut magic))
+            .is_ok()
+            && &magic == b"LVPACK";
+        if is_pack {
+            let pack = lumiview::nearfield::pack::Pack::open(one)?;
+            return Ok((pack.rayset().clone(), ImportReport::default()));
+        }
+    }
     let (scan, report) = load_scan_with_report(scan, &import.options())?;
     Ok((scan.set, report))
 }
