@@ -118,7 +118,8 @@ pub fn directions(layout: &Layout, seed: u64) -> Result<Vec<(DVec3, Hemisphere)>
                 return Err(NearfieldError::invalid("rigo", "overlap must be 0…30° and jitter 0…5°"));
             }
             let (meridians, rows) = rigo_dims(per_hemisphere, overlap_deg);
-            let dtheta = (90.0 + overlap_deg) / rows as f64;
+            // Rows from the pole to exactly 90° + overlap, so the hemispheres overlap at the equator.
+            let dtheta = (90.0 + overlap_deg) / (rows - 1) as f64;
             let mut rng = SplitMix64::new(seed);
             let mut out = Vec::with_capacity(2 * meridians * rows);
             for (h, sign) in [(Hemisphere::Lower, 1.0), (Hemisphere::Upper, -1.0)] {
@@ -208,6 +209,25 @@ mod tests {
         assert!((27_000..=29_000).contains(&lower), "{lower}");
         // Overlap: some lower-hemisphere cameras sit above the equator.
         assert!(a.iter().any(|(d, h)| *h == Hemisphere::Lower && d.z > 0.01));
+        // Even a small layout reaches past the equator from both sides.
+        let small = directions(
+            &Layout::Rigo {
+                per_hemisphere: 500,
+                overlap_deg: 2.0,
+                jitter_deg: 0.0,
+            },
+            1,
+        )
+        .unwrap();
+        let top_of_lower = small
+            .iter()
+            .filter(|(_, h)| *h == Hemisphere::Lower)
+            .map(|(d, _)| d.z)
+            .fold(f64::MIN, f64::max);
+        assert!(
+            (top_of_lower - 2f64.to_radians().sin()).abs() < 1e-9,
+            "lower rows end at 92°: {top_of_lower}"
+        );
         assert!(a.iter().all(|(d, _)| (d.length() - 1.0).abs() < 1e-12));
     }
 
