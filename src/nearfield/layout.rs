@@ -161,8 +161,8 @@ fn check_count(name: &str, n: usize) -> Result<()> {
 /// Cameras on `sphere` for a layout, each looking at the centre, labelled `cam N`.
 ///
 /// In a `rigo` layout every meridian starts at the pole, and, as on a real goniophotometer, the
-/// camera there is turned about its optical axis with its meridian: its `down` axis points along the
-/// meridian's azimuth φ, so the pole cameras share a position but not an orientation.
+/// camera there is turned about its optical axis with its meridian (its image axes continue those of
+/// the next camera along the meridian), so the pole cameras share a position but not an orientation.
 pub fn cameras(sphere: &CaptureSphere, layout: &Layout, seed: u64) -> Result<Vec<Camera>> {
     let mut cams: Vec<Camera> = directions(layout, seed)?
         .into_iter()
@@ -182,8 +182,10 @@ pub fn cameras(sphere: &CaptureSphere, layout: &Layout, seed: u64) -> Result<Vec
             }
             let m = (i / rows) % meridians;
             let phi = (360.0 * m as f64 / meridians as f64).to_radians();
-            let down = DVec3::new(phi.cos(), phi.sin(), 0.0);
+            // The next camera along the meridian has image up ≈ ±(cos φ, sin φ, 0) (sign of forward.z):
+            // keep the pole camera's axes continuous with it.
             let forward = c.forward;
+            let down = -DVec3::new(phi.cos(), phi.sin(), 0.0) * forward.z.signum();
             c.down = (down - forward * forward.dot(down)).normalize();
             c.right = c.down.cross(forward).normalize();
         }
@@ -251,6 +253,12 @@ mod tests {
         for pair in poles.windows(2) {
             assert!((pair[0].position_m - pair[1].position_m).length() < 1e-12);
             assert!((pair[0].down - pair[1].down).length() > 1e-3, "orientations differ");
+        }
+        // Continuous with the next camera along each meridian (rows are consecutive indices).
+        for (i, c) in cams.iter().enumerate() {
+            if c.position_m.z.abs() > 0.999_999 {
+                assert!(c.down.dot(cams[i + 1].down) > 0.95, "camera {i}: rows are ~10° apart here");
+            }
         }
     }
 

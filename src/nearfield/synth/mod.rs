@@ -33,10 +33,7 @@ pub use luminaires::{CosineDisc, LambertDisc, LambertRect, LedDots, Peak, StarPa
 pub use proxy::ProxyMesh;
 pub use raycast::{ortho_intensity, pixel_bounds, render_ortho, render_pinhole, OrthoView, PixelRect};
 pub use reflector::{FluxBudget, Reflector};
-pub use scan::{
-    framing_intrinsics, intrinsics_for_fov, orient_pole_cameras, render_all, synth_scan, synth_set, SynthOptions,
-    SynthSource,
-};
+pub use scan::{framing_intrinsics, intrinsics_for_fov, render_all, synth_scan, synth_set, SynthOptions, SynthSource};
 pub use two_planes::TwoPlanes;
 
 /// An axis-aligned box in the luminaire frame (m). Planar luminaires have zero thickness.

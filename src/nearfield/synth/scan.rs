@@ -231,39 +231,13 @@ pub fn synth_set(opts: &SynthOptions) -> Result<(Arc<dyn Luminaire>, RayImageSet
         radius_m: opts.radius_m,
     };
     let cameras = layout::cameras(&sphere, &opts.layout, opts.seed)?;
-    let mut set = RayImageSet {
+    let set = RayImageSet {
         sphere,
         intrinsics,
         cameras,
     };
-    orient_pole_cameras(&mut set);
     set.validate()?;
     Ok((lum, set))
-}
-
-/// Gives coincident cameras at a pole (the `rigo` meridian starts) the orientation their meridian
-/// tends to, as a goniophotometer's camera turning with its meridian has: member j of a group of k
-/// sits on meridian φ = 360°·j/k (the `rigo` order) and gets image up = ±(cos φ, sin φ, 0) (+ at the
-/// lower pole, − at the upper), the limit of [`crate::nearfield::rayset::look_at_basis`] along that
-/// meridian. Without this they would be duplicates of one pose (which scan import rejects); their
-/// images then differ by the in-plane rotation, as measured ones do. Other coincident groups (none
-/// in the built-in layouts) are left alone.
-pub fn orient_pole_cameras(set: &mut RayImageSet) {
-    for group in set.coincident_groups(1e-6) {
-        let k = group.len();
-        for (j, &i) in group.iter().enumerate() {
-            let Some(cam) = set.cameras.get_mut(i) else { continue };
-            let f = cam.forward;
-            if f.z.abs() < 1.0 - 1e-9 {
-                continue;
-            }
-            let phi = std::f64::consts::TAU * j as f64 / k as f64;
-            let up = glam::DVec3::new(phi.cos(), phi.sin(), 0.0) * f.z.signum();
-            let down = -up;
-            cam.right = down.cross(f).normalize();
-            cam.down = down;
-        }
-    }
 }
 
 /// A synthetic scan: the cameras of `opts.layout` on the capture sphere, looking at the centre, and a
