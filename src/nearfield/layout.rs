@@ -257,7 +257,10 @@ mod tests {
         // Continuous with the next camera along each meridian (rows are consecutive indices).
         for (i, c) in cams.iter().enumerate() {
             if c.position_m.z.abs() > 0.999_999 {
-                assert!(c.down.dot(cams[i + 1].down) > 0.95, "camera {i}: rows are ~10° apart here");
+                assert!(
+                    c.down.dot(cams[i + 1].down) > 0.95,
+                    "camera {i}: rows are ~10° apart here"
+                );
             }
         }
     }
