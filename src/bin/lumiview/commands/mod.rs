@@ -51,6 +51,43 @@ fn detect_kind(file: &Path) -> FileKind {
     }
 }
 
+/// Parses a camera layout: `rigo:N` (N cameras per hemisphere, 2° overlap, 0.05° jitter),
+/// `fibonacci:N` or `grid:P,T`.
+pub fn parse_layout(text: &str) -> Result<lumiview::nearfield::layout::Layout, String> {
+    use lumiview::nearfield::layout::Layout;
+    let bad = || format!("--layout `{text}`: expected rigo:N, fibonacci:N or grid:P,T, e.g. rigo:28000");
+    let (kind, rest) = text.split_once(':').ok_or_else(bad)?;
+    let num = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
+    match kind.trim().to_ascii_lowercase().as_str() {
+        "rigo" => Ok(Layout::Rigo {
+            per_hemisphere: num(rest)?,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        }),
+        "fibonacci" => Ok(Layout::Fibonacci { count: num(rest)? }),
+        "grid" => {
+            let (p, t) = rest.split_once(',').ok_or_else(bad)?;
+            Ok(Layout::Grid {
+                phi_steps: num(p)?,
+                theta_steps: num(t)?,
+            })
+        }
+        _ => Err(bad()),
+    }
+}
+
+/// Parses an image size `WxH` in pixels, each side within 1…65536.
+pub fn parse_size_px(text: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("--size `{text}`: expected WxH in pixels within 1…65536, e.g. 1216x1021");
+    let (w, h) = text.split_once(['x', 'X', '×']).ok_or_else(bad)?;
+    let w: u32 = w.trim().parse().map_err(|_| bad())?;
+    let h: u32 = h.trim().parse().map_err(|_| bad())?;
+    if !(1..=65_536).contains(&w) || !(1..=65_536).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
 /// Result of a subcommand.
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
 

@@ -69,18 +69,6 @@ pub struct PackArgs {
     pub json: bool,
 }
 
-/// Parses `WxH`.
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--size `{text}`: expected WxH in pixels within 1…65536, e.g. 1216x1021");
-    let (w, h) = text.split_once(['x', 'X', '×']).ok_or_else(bad)?;
-    let w: u32 = w.trim().parse().map_err(|_| bad())?;
-    let h: u32 = h.trim().parse().map_err(|_| bad())?;
-    if !(1..=65_536).contains(&w) || !(1..=65_536).contains(&h) {
-        return Err(bad());
-    }
-    Ok((w, h))
-}
-
 /// Reads the first bytes of a file to tell a pack or ray file from anything else.
 fn magic(file: &Path) -> Result<[u8; 8], String> {
     use std::io::Read as _;
@@ -100,9 +88,14 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
         let layout_text = args.layout.as_deref().unwrap_or("rigo:28000");
         let opts = SynthOptions {
             luminaire: name.clone(),
-            layout: super::synth::parse_layout(layout_text)?,
+            layout: crate::commands::parse_layout(layout_text)?,
             radius_m: args.radius.unwrap_or(d.radius_m),
-            size: args.size.as_deref().map(parse_size).transpose()?.unwrap_or(d.size),
+            size: args
+                .size
+                .as_deref()
+                .map(crate::commands::parse_size_px)
+                .transpose()?
+                .unwrap_or(d.size),
             ..d
         };
         let desc = format!(
@@ -139,7 +132,7 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
     let (width, height) = args
         .size
         .as_deref()
-        .map(parse_size)
+        .map(crate::commands::parse_size_px)
         .transpose()?
         .unwrap_or((d.width, d.height));
     let opts = BinningOptions {
@@ -147,7 +140,7 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
             radius_m: args.radius.unwrap_or(d.sphere.radius_m),
             ..d.sphere
         },
-        layout: super::synth::parse_layout(layout_text)?,
+        layout: crate::commands::parse_layout(layout_text)?,
         width,
         height,
         ..d

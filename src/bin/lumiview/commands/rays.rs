@@ -5,7 +5,6 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use glam::DVec3;
 use lumiview::nearfield::binning::{bin_rays, BinnedScan, BinningOptions, BinningReport};
-use lumiview::nearfield::layout::Layout;
 use lumiview::nearfield::tm25::{RayFile, RayStats};
 use lumiview::nearfield::CaptureSphere;
 use serde_json::{json, Value};
@@ -67,41 +66,6 @@ pub struct Rays2scanArgs {
     /// Bin and report, but write nothing.
     #[arg(long)]
     pub dry_run: bool,
-}
-
-/// Parses `fibonacci:N`, `grid:P,T` or `rigo:N`.
-fn parse_layout(text: &str) -> Result<Layout, String> {
-    let bad = || format!("--layout `{text}`: expected fibonacci:N, grid:P,T or rigo:N");
-    let (kind, rest) = text.split_once(':').ok_or_else(bad)?;
-    let num = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
-    match kind.trim().to_ascii_lowercase().as_str() {
-        "fibonacci" => Ok(Layout::Fibonacci { count: num(rest)? }),
-        "rigo" => Ok(Layout::Rigo {
-            per_hemisphere: num(rest)?,
-            overlap_deg: 2.0,
-            jitter_deg: 0.05,
-        }),
-        "grid" => {
-            let (p, t) = rest.split_once(',').ok_or_else(bad)?;
-            Ok(Layout::Grid {
-                phi_steps: num(p)?,
-                theta_steps: num(t)?,
-            })
-        }
-        _ => Err(bad()),
-    }
-}
-
-/// Parses `WxH`.
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--size `{text}`: expected WxH in pixels, e.g. 64x64");
-    let (w, h) = text.split_once(['x', 'X', '×']).ok_or_else(bad)?;
-    let w: u32 = w.trim().parse().map_err(|_| bad())?;
-    let h: u32 = h.trim().parse().map_err(|_| bad())?;
-    if w == 0 || h == 0 {
-        return Err(bad());
-    }
-    Ok((w, h))
 }
 
 /// Parses `X,Y,Z`.
@@ -526,8 +490,8 @@ fn write_binned(dir: &Path, output: &Path, binned: &BinnedScan) -> Result<PathBu
 
 /// `lumiview rays2scan`.
 pub fn rays2scan(args: &Rays2scanArgs) -> CliResult {
-    let layout = parse_layout(&args.layout)?;
-    let (width, height) = parse_size(&args.size)?;
+    let layout = crate::commands::parse_layout(&args.layout)?;
+    let (width, height) = crate::commands::parse_size_px(&args.size)?;
     let centre = parse_centre(&args.centre)?;
     let fov_deg = if args.fov.trim().eq_ignore_ascii_case("auto") {
         None
@@ -573,27 +537,31 @@ pub fn rays2scan(args: &Rays2scanArgs) -> CliResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lumiview::nearfield::layout::Layout;
 
     #[test]
     fn argument_parsers() {
-        assert_eq!(parse_layout("fibonacci:12"), Ok(Layout::Fibonacci { count: 12 }));
         assert_eq!(
-            parse_layout("grid:8,5"),
+            crate::commands::parse_layout("fibonacci:12"),
+            Ok(Layout::Fibonacci { count: 12 })
+        );
+        assert_eq!(
+            crate::commands::parse_layout("grid:8,5"),
             Ok(Layout::Grid {
                 phi_steps: 8,
                 theta_steps: 5
             })
         );
         assert!(matches!(
-            parse_layout("rigo:100"),
+            crate::commands::parse_layout("rigo:100"),
             Ok(Layout::Rigo {
                 per_hemisphere: 100,
                 ..
             })
         ));
-        assert!(parse_layout("grid:8").is_err() && parse_layout("hex:3").is_err());
-        assert_eq!(parse_size("640x480"), Ok((640, 480)));
-        assert!(parse_size("0x4").is_err() && parse_size("64").is_err());
+        assert!(crate::commands::parse_layout("grid:8").is_err() && crate::commands::parse_layout("hex:3").is_err());
+        assert_eq!(crate::commands::parse_size_px("640x480"), Ok((640, 480)));
+        assert!(crate::commands::parse_size_px("0x4").is_err() && crate::commands::parse_size_px("64").is_err());
         assert_eq!(parse_centre("0,-1,2.5"), Ok(DVec3::new(0.0, -1.0, 2.5)));
         assert!(parse_centre("0,1").is_err());
         assert_eq!(output_dir(Path::new("out/scan.json")), PathBuf::from("out"));

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use lumiview::nearfield::layout::{direction_deg, Layout};
+use lumiview::nearfield::layout::direction_deg;
 use lumiview::nearfield::synth::{self, render_ortho, Luminaire, OrthoView, SynthOptions};
 use lumiview::nearfield::Scan;
 use rayon::prelude::*;
@@ -64,41 +64,6 @@ pub struct SynthArgs {
     pub json: bool,
 }
 
-/// Parses `rigo:N`, `fibonacci:N` or `grid:P,T`.
-pub fn parse_layout(text: &str) -> Result<Layout, String> {
-    let bad = || format!("--layout `{text}`: expected rigo:N, fibonacci:N or grid:P,T, e.g. rigo:28000");
-    let (kind, rest) = text.split_once(':').ok_or_else(bad)?;
-    let num = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
-    match kind.trim() {
-        "rigo" => Ok(Layout::Rigo {
-            per_hemisphere: num(rest)?,
-            overlap_deg: 2.0,
-            jitter_deg: 0.05,
-        }),
-        "fibonacci" => Ok(Layout::Fibonacci { count: num(rest)? }),
-        "grid" => {
-            let (p, t) = rest.split_once(',').ok_or_else(bad)?;
-            Ok(Layout::Grid {
-                phi_steps: num(p)?,
-                theta_steps: num(t)?,
-            })
-        }
-        _ => Err(bad()),
-    }
-}
-
-/// Parses `WxH`.
-fn parse_size(text: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("--size `{text}`: expected WxH in pixels, e.g. 1216x1021");
-    let (w, h) = text.split_once(['x', 'X', '×']).ok_or_else(bad)?;
-    let w = w.trim().parse::<u32>().map_err(|_| bad())?;
-    let h = h.trim().parse::<u32>().map_err(|_| bad())?;
-    if w == 0 || h == 0 || w > 65_536 || h > 65_536 {
-        return Err(format!("--size `{text}`: each side must be within 1…65536"));
-    }
-    Ok((w, h))
-}
-
 /// Parses `C,GAMMA` in degrees (γ within 0…180).
 fn parse_direction(text: &str) -> Result<(f64, f64), String> {
     let bad = || format!("--ortho `{text}`: expected C,GAMMA in degrees, e.g. 0,30");
@@ -126,9 +91,9 @@ pub fn build_scan(args: &SynthArgs) -> Result<Scan, Box<dyn std::error::Error>> 
         .ok_or("--layout is required for a scan, e.g. --layout rigo:28000 (full size) or fibonacci:200")?;
     let opts = SynthOptions {
         luminaire: name.to_string(),
-        layout: parse_layout(layout)?,
+        layout: crate::commands::parse_layout(layout)?,
         radius_m: args.radius,
-        size: parse_size(&args.size)?,
+        size: crate::commands::parse_size_px(&args.size)?,
         fov_deg: args.fov_deg,
         intrinsics: None,
         supersample: args.supersample,
@@ -392,29 +357,36 @@ fn write_log_png(path: &Path, width: u32, height: u32, data: &[f32], max: f64) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use lumiview::nearfield::layout::Layout;
 
     #[test]
     fn layouts_sizes_and_directions_parse() {
         assert!(matches!(
-            parse_layout("rigo:28000"),
+            crate::commands::parse_layout("rigo:28000"),
             Ok(Layout::Rigo {
                 per_hemisphere: 28000,
                 ..
             })
         ));
-        assert_eq!(parse_layout("fibonacci:10"), Ok(Layout::Fibonacci { count: 10 }));
         assert_eq!(
-            parse_layout("grid:36,19"),
+            crate::commands::parse_layout("fibonacci:10"),
+            Ok(Layout::Fibonacci { count: 10 })
+        );
+        assert_eq!(
+            crate::commands::parse_layout("grid:36,19"),
             Ok(Layout::Grid {
                 phi_steps: 36,
                 theta_steps: 19
             })
         );
         for bad in ["rigo", "rigo:x", "grid:3", "spiral:4", "fibonacci:-1"] {
-            assert!(matches!(parse_layout(bad), Err(e) if e.contains("--layout")), "{bad}");
+            assert!(
+                matches!(crate::commands::parse_layout(bad), Err(e) if e.contains("--layout")),
+                "{bad}"
+            );
         }
-        assert_eq!(parse_size("64x48"), Ok((64, 48)));
-        assert!(parse_size("0x4").is_err() && parse_size("64").is_err());
+        assert_eq!(crate::commands::parse_size_px("64x48"), Ok((64, 48)));
+        assert!(crate::commands::parse_size_px("0x4").is_err() && crate::commands::parse_size_px("64").is_err());
         assert_eq!(parse_direction("90,30"), Ok((90.0, 30.0)));
         assert!(parse_direction("0,190").is_err() && parse_direction("a,b").is_err());
     }
