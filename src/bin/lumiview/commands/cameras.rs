@@ -12,14 +12,6 @@ use serde_json::json;
 
 use super::{print_report, CliResult};
 
-/// Appends a formatted line to a report string (formatting into a `String` cannot fail).
-macro_rules! outln {
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = writeln!($s, $($arg)*);
-    }};
-}
-
 /// How a scan is read from manifests (shared by the commands that take scans).
 #[derive(Args, Debug, Clone)]
 pub struct ScanImportArgs {

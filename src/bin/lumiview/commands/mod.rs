@@ -1,5 +1,25 @@
 //! The subcommands. Each returns an error whose text names the file or argument at fault.
 
+/// Appends formatted text to a report string (formatting into a `String` cannot fail).
+macro_rules! out {
+    ($s:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = write!($s, $($arg)*);
+    }};
+}
+
+/// Appends a formatted line to a report string.
+macro_rules! outln {
+    ($s:expr) => {{
+        $s.push('\n');
+    }};
+    ($s:expr, $($arg:tt)*) => {{
+        use std::fmt::Write as _;
+        let _ = writeln!($s, $($arg)*);
+    }};
+}
+
+// The macros above are visible in the submodules declared below (textual macro scope).
 mod cameras;
 mod lut;
 mod pack;
@@ -90,25 +110,6 @@ pub fn parse_size_px(text: &str) -> Result<(u32, u32), String> {
 
 /// Result of a subcommand.
 pub type CliResult = Result<(), Box<dyn std::error::Error>>;
-
-/// Appends formatted text to a report string (formatting into a `String` cannot fail).
-macro_rules! out {
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = write!($s, $($arg)*);
-    }};
-}
-
-/// Appends a formatted line to a report string.
-macro_rules! outln {
-    ($s:expr) => {{
-        $s.push('\n');
-    }};
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = writeln!($s, $($arg)*);
-    }};
-}
 
 /// Writes a report to stdout; a closed pipe (`| head`) is not an error, and nothing panics.
 pub fn print_report(text: &str) -> CliResult {

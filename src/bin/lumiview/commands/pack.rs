@@ -15,14 +15,6 @@ use serde_json::json;
 
 use super::{print_report, CliResult};
 
-/// Appends a formatted line to a report string (formatting into a `String` cannot fail).
-macro_rules! outln {
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = writeln!($s, $($arg)*);
-    }};
-}
-
 /// `lumiview pack`: store a scan as a tiled `.lvpack` file.
 #[derive(Args, Debug)]
 pub struct PackArgs {

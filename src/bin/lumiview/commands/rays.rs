@@ -11,25 +11,6 @@ use serde_json::{json, Value};
 
 use super::{print_report, CliResult};
 
-/// Appends formatted text to a report string (formatting into a `String` cannot fail).
-macro_rules! out {
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = write!($s, $($arg)*);
-    }};
-}
-
-/// Appends a formatted line to a report string.
-macro_rules! outln {
-    ($s:expr) => {{
-        $s.push('\n');
-    }};
-    ($s:expr, $($arg:tt)*) => {{
-        use std::fmt::Write as _;
-        let _ = writeln!($s, $($arg)*);
-    }};
-}
-
 /// `lumiview rays2scan`: bin a TM-25 ray file into the luminance images of a virtual scan.
 #[derive(Args, Debug)]
 pub struct Rays2scanArgs {
