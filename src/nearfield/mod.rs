@@ -8,7 +8,9 @@ pub mod images;
 pub mod layout;
 pub mod manifest;
 pub mod pack;
+pub mod proxy;
 pub mod rayset;
+pub mod select;
 pub mod synth;
 pub mod tm25;
 
