@@ -4,10 +4,12 @@
 //! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
 //! - [`nearfield`]: near-field scans (pure CPU).
 //! - [`gpu`]: wgpu renderer.
+//! - [`eval`]: the near-field quality harness (synthetic scans against the exact ray-caster).
 //! - [`interop`]: Vulkan external memory (the only ash / wgpu-hal code).
 //! - [`ffi`]: the C ABI (the only `extern "C"` code).
 #![cfg_attr(test, allow(clippy::unwrap_used, clippy::expect_used))]
 
+pub mod eval;
 pub mod ffi;
 pub mod gpu;
 pub mod interop;

@@ -100,6 +100,7 @@ impl From<GpuError> for FfiError {
             GpuError::Interop(crate::interop::InteropError::Unsupported(_)) => LUMI_STATUS_UNSUPPORTED,
             GpuError::Interop(crate::interop::InteropError::Vulkan(_)) => LUMI_STATUS_GPU,
             GpuError::Photometry(p) => photometry_status(p),
+            GpuError::Nearfield(n) => nearfield_status(n),
         };
         FfiError::new(status, e.to_string())
     }
@@ -110,6 +111,16 @@ fn photometry_status(e: &PhotometryError) -> lumi_status {
         PhotometryError::Io { .. } => LUMI_STATUS_IO,
         PhotometryError::Parse(_) => LUMI_STATUS_PARSE,
         PhotometryError::InvalidArgument { .. } => LUMI_STATUS_INVALID_ARGUMENT,
+    }
+}
+
+fn nearfield_status(e: &crate::nearfield::NearfieldError) -> lumi_status {
+    use crate::nearfield::NearfieldError as N;
+    match e {
+        N::Io { .. } => LUMI_STATUS_IO,
+        N::InvalidArgument { .. } => LUMI_STATUS_INVALID_ARGUMENT,
+        N::Unsupported { .. } => LUMI_STATUS_UNSUPPORTED,
+        _ => LUMI_STATUS_PARSE,
     }
 }
 

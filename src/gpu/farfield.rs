@@ -365,19 +365,17 @@ impl FarfieldPass {
         Ok(p)
     }
 
-    /// Renders `instances` (luminaire, model matrix: luminaire frame → world) into `target` seen by
-    /// `camera`, then releases the exported images to the host and waits for the GPU to finish.
-    pub fn render(
+    /// Prepares a frame: checks the options and instances, writes the draw uniforms and picks the
+    /// pipelines for the target's formats. The draws happen in [`FarfieldPass::draw`] inside the
+    /// frame's render pass.
+    pub fn prepare(
         &mut self,
         ctx: &GpuContext,
-        target: &mut RenderTarget,
+        target: &RenderTarget,
         camera: &HostCamera,
         options: &RenderOptions,
         instances: &[(&FarfieldLuminaire, Mat4)],
-    ) -> Result<(), GpuError> {
-        camera.validate()?;
-        options.validate(target)?;
-        ctx.check()?;
+    ) -> Result<FarfieldFrame, GpuError> {
         for (_, m) in instances {
             if !m.is_finite() || m.determinant().abs() < 1e-30 {
                 return Err(GpuError::invalid(
@@ -395,7 +393,7 @@ impl FarfieldPass {
         let clip_from_world = camera.clip_from_world();
         // Up to three draws per instance: opening, solid, housing.
         let mut slots: Vec<InstanceUniform> = Vec::with_capacity(instances.len() * 3);
-        let mut draws: Vec<(usize, &wgpu::BindGroup, &wgpu::Buffer, u32, bool)> = Vec::new();
+        let mut draws: Vec<FarfieldDraw> = Vec::new();
         for (lum, model) in instances {
             let eye = camera.eye_in(*model);
             let base = InstanceUniform {
@@ -405,7 +403,7 @@ impl FarfieldPass {
                 line_color: [0.0; 4],
             };
             if let Some((buf, n)) = &lum.opening {
-                draws.push((slots.len(), &lum.table_bind, buf, *n, false));
+                draws.push((slots.len(), lum.table_bind.clone(), buf.clone(), *n, false));
                 slots.push(base);
             }
             if options.overlays.solid {
@@ -414,7 +412,7 @@ impl FarfieldPass {
                     let mut u = base;
                     u.clip_from_local = (clip_from_world * scaled).to_cols_array_2d();
                     u.line_color = [1.0, 0.55, 0.1, 1.0];
-                    draws.push((slots.len(), &lum.table_bind, buf, *n, true));
+                    draws.push((slots.len(), lum.table_bind.clone(), buf.clone(), *n, true));
                     slots.push(u);
                 }
             }
@@ -422,10 +420,13 @@ impl FarfieldPass {
                 if let Some((buf, n)) = &lum.housing {
                     let mut u = base;
                     u.line_color = [0.2, 0.6, 1.0, 1.0];
-                    draws.push((slots.len(), &lum.table_bind, buf, *n, true));
+                    draws.push((slots.len(), lum.table_bind.clone(), buf.clone(), *n, true));
                     slots.push(u);
                 }
             }
+        }
+        if draws.is_empty() {
+            return Ok(FarfieldFrame::default());
         }
         let needed = (slots.len().max(1) as u64) * SLOT;
         if self.uniforms.as_ref().is_none_or(|(_, cap, _)| *cap < needed) {
@@ -466,106 +467,137 @@ impl FarfieldPass {
         let Some((ubuf, _, ubind)) = self.uniforms.as_ref() else {
             return Err(GpuError::invalid("uniforms", "uniform buffer missing"));
         };
-        if !bytes.is_empty() {
-            ctx.queue.write_buffer(ubuf, 0, &bytes);
+        ctx.queue.write_buffer(ubuf, 0, &bytes);
+        Ok(FarfieldFrame {
+            draws,
+            pipelines: Some((tri_pipeline, line_pipeline, ubind.clone())),
+        })
+    }
+
+    /// Records a prepared frame's draws into the frame's render pass.
+    pub fn draw(&self, frame: &FarfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
+        let Some((tri, line, ubind)) = &frame.pipelines else {
+            return;
+        };
+        for (slot, table, vb, count, lines) in &frame.draws {
+            pass.set_pipeline(if *lines { line } else { tri });
+            pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
+            pass.set_bind_group(1, table, &[]);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.draw(0..*count, 0..1);
         }
-        let far = if camera.reversed_z { 0.0 } else { 1.0 };
-        let color_view = target
-            .color
-            .texture()
-            .create_view(&wgpu::TextureViewDescriptor::default());
-        let depth_copy_view = target
-            .depth_copy
-            .as_ref()
-            .map(|d| d.texture().create_view(&wgpu::TextureViewDescriptor::default()));
-        let depth_view = target
-            .depth
-            .texture()
-            .create_view(&wgpu::TextureViewDescriptor::default());
-        let family = ctx.caps.queue_family;
-        let mut cbs: Vec<wgpu::CommandBuffer> = Vec::new();
-        for e in target.exportables_mut() {
-            cbs.extend(e.encode_acquire(&ctx.device, family));
-        }
-        let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("far-field frame"),
-        });
-        {
-            let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
-                view: &color_view,
+    }
+}
+
+/// One far-field draw: uniform slot, table bind group, vertex buffer, vertex count, lines or not.
+type FarfieldDraw = (usize, wgpu::BindGroup, wgpu::Buffer, u32, bool);
+
+/// One prepared frame of the far-field pass.
+#[derive(Debug, Default)]
+pub struct FarfieldFrame {
+    draws: Vec<FarfieldDraw>,
+    pipelines: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline, wgpu::BindGroup)>,
+}
+
+/// Records one frame into `target`: acquires the exported images, clears colour (transparent),
+/// depth copy and depth (far), records `draw` into the render pass, releases the images to the host,
+/// submits, and waits for the GPU (or signals the target's semaphores).
+pub fn render_frame(
+    ctx: &GpuContext,
+    target: &mut RenderTarget,
+    camera: &HostCamera,
+    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
+) -> Result<(), GpuError> {
+    let far = if camera.reversed_z { 0.0 } else { 1.0 };
+    let color_view = target
+        .color
+        .texture()
+        .create_view(&wgpu::TextureViewDescriptor::default());
+    let depth_copy_view = target
+        .depth_copy
+        .as_ref()
+        .map(|d| d.texture().create_view(&wgpu::TextureViewDescriptor::default()));
+    let depth_view = target
+        .depth
+        .texture()
+        .create_view(&wgpu::TextureViewDescriptor::default());
+    let family = ctx.caps.queue_family;
+    let mut cbs: Vec<wgpu::CommandBuffer> = Vec::new();
+    for e in target.exportables_mut() {
+        cbs.extend(e.encode_acquire(&ctx.device, family));
+    }
+    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+        label: Some("lumiview frame"),
+    });
+    {
+        let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
+            view: &color_view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                store: wgpu::StoreOp::Store,
+            },
+        })];
+        if let Some(v) = &depth_copy_view {
+            color_attachments.push(Some(wgpu::RenderPassColorAttachment {
+                view: v,
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: far,
+                        g: 0.0,
+                        b: 0.0,
+                        a: 1.0,
+                    }),
                     store: wgpu::StoreOp::Store,
                 },
-            })];
-            if let Some(v) = &depth_copy_view {
-                color_attachments.push(Some(wgpu::RenderPassColorAttachment {
-                    view: v,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: far,
-                            g: 0.0,
-                            b: 0.0,
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                }));
-            }
-            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("far-field appearance"),
-                color_attachments: &color_attachments,
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(far as f32),
-                        store: wgpu::StoreOp::Store,
-                    }),
-                    stencil_ops: None,
+            }));
+        }
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("luminaire appearance"),
+            color_attachments: &color_attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &depth_view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(far as f32),
+                    store: wgpu::StoreOp::Store,
                 }),
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            for (slot, table, vb, count, lines) in &draws {
-                pass.set_pipeline(if *lines { &line_pipeline } else { &tri_pipeline });
-                pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
-                pass.set_bind_group(1, *table, &[]);
-                pass.set_vertex_buffer(0, vb.slice(..));
-                pass.draw(0..*count, 0..1);
-            }
-        }
-        cbs.push(enc.finish());
-        for e in target.exportables_mut() {
-            cbs.push(e.encode_release(&ctx.device, family));
-        }
-        if let Some(sem) = &target.semaphores {
-            // GPU-side contract: wait for the host's reads of the previous frame, signal this one's end.
-            if target.frames > 0 {
-                sem.host_done.wait_on_next_submit(&ctx.queue);
-            }
-            sem.render_done.signal_on_next_submit(&ctx.queue);
-        }
-        ctx.scoped("rendering a frame", || {
-            ctx.queue.submit(cbs);
-            Ok(())
-        })?;
-        if target.semaphores.is_some() {
-            let _ = ctx.device.poll(wgpu::PollType::Poll);
-            ctx.check()?;
-        } else {
-            ctx.wait_idle()?;
-        }
-        for e in target.exportables_mut() {
-            e.released = true;
-        }
-        target.frames += 1;
-        Ok(())
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        draw(&mut pass);
     }
+    cbs.push(enc.finish());
+    for e in target.exportables_mut() {
+        cbs.push(e.encode_release(&ctx.device, family));
+    }
+    if let Some(sem) = &target.semaphores {
+        // GPU-side contract: wait for the host's reads of the previous frame, signal this one's end.
+        if target.frames > 0 {
+            sem.host_done.wait_on_next_submit(&ctx.queue);
+        }
+        sem.render_done.signal_on_next_submit(&ctx.queue);
+    }
+    ctx.scoped("rendering a frame", || {
+        ctx.queue.submit(cbs);
+        Ok(())
+    })?;
+    if target.semaphores.is_some() {
+        let _ = ctx.device.poll(wgpu::PollType::Poll);
+        ctx.check()?;
+    } else {
+        ctx.wait_idle()?;
+    }
+    for e in target.exportables_mut() {
+        e.released = true;
+    }
+    target.frames += 1;
+    Ok(())
 }
 
 /// Luminance (cd/m²) the far-field pass shows for a direction `d` (luminaire frame, towards the eye),

@@ -5,13 +5,16 @@
 //! - [`camera`]: the host's matrices and conventions.
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`meshes`]: CPU geometry of openings, solids and housings.
+//! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles.
 //! - [`renderer`]: luminaires, instances and frames: what the C API drives.
 
 pub mod camera;
 pub mod context;
 pub mod farfield;
 pub mod meshes;
+pub mod nearfield;
 pub mod renderer;
+pub mod residency;
 pub mod target;
 
 pub use camera::{DepthRange, HostCamera, Origin};
@@ -52,6 +55,9 @@ pub enum GpuError {
     /// Loading photometry failed.
     #[error(transparent)]
     Photometry(#[from] PhotometryError),
+    /// A near-field scan was bad or could not be read.
+    #[error(transparent)]
+    Nearfield(#[from] crate::nearfield::NearfieldError),
 }
 
 impl GpuError {

@@ -12,9 +12,11 @@ use glam::Mat4;
 
 use super::camera::HostCamera;
 use super::context::{ContextDesc, GpuContext};
-use super::farfield::{FarfieldLuminaire, FarfieldPass, RenderOptions};
+use super::farfield::{render_frame, FarfieldLuminaire, FarfieldPass, RenderOptions};
+use super::nearfield::{NearfieldLuminaire, NearfieldOptions, NearfieldPass, NearfieldSettings};
 use super::target::RenderTarget;
 use super::GpuError;
+use crate::nearfield::pack::Pack;
 use crate::photometry::{self, LoadOptions, Photometry};
 
 /// Identifies a luminaire in a renderer.
@@ -30,6 +32,8 @@ pub struct InstanceId(pub u64);
 pub enum Luminaire {
     /// Far-field photometry (IES / EULUMDAT) drawn as its luminous opening.
     Farfield(Arc<FarfieldLuminaire>),
+    /// A near-field scan drawn with its measured luminance.
+    Nearfield(Arc<NearfieldLuminaire>),
 }
 
 impl Luminaire {
@@ -37,6 +41,7 @@ impl Luminaire {
     pub fn photometry(&self) -> Option<&Arc<Photometry>> {
         match self {
             Luminaire::Farfield(f) => Some(&f.photometry),
+            Luminaire::Nearfield(_) => None,
         }
     }
 }
@@ -45,6 +50,7 @@ impl Luminaire {
 struct Instance {
     luminaire: LuminaireId,
     model: Mat4,
+    nearfield: NearfieldSettings,
 }
 
 /// The renderer: a GPU context, the passes, luminaires and instances.
@@ -53,6 +59,7 @@ pub struct Renderer {
     /// The GPU context.
     pub ctx: GpuContext,
     farfield: FarfieldPass,
+    nearfield: NearfieldPass,
     luminaires: BTreeMap<LuminaireId, Luminaire>,
     instances: BTreeMap<InstanceId, Instance>,
     next_id: u64,
@@ -63,9 +70,11 @@ impl Renderer {
     pub fn new(desc: &ContextDesc) -> Result<Self, GpuError> {
         let ctx = GpuContext::new(desc)?;
         let farfield = FarfieldPass::new(&ctx)?;
+        let nearfield = NearfieldPass::new(&ctx)?;
         Ok(Renderer {
             ctx,
             farfield,
+            nearfield,
             luminaires: BTreeMap::new(),
             instances: BTreeMap::new(),
             next_id: 1,
@@ -92,6 +101,31 @@ impl Renderer {
         Ok(id)
     }
 
+    /// Adds a near-field scan (an open `.lvpack`) as a luminaire, with an optional proxy mesh
+    /// (triangle list in the luminaire frame, metres).
+    pub fn add_pack(
+        &mut self,
+        pack: Arc<Pack>,
+        proxy: Option<Vec<[f32; 3]>>,
+        opts: &NearfieldOptions,
+    ) -> Result<LuminaireId, GpuError> {
+        let lum = self.nearfield.upload(&self.ctx, pack, proxy, opts)?;
+        let id = LuminaireId(self.next());
+        self.luminaires.insert(id, Luminaire::Nearfield(Arc::new(lum)));
+        Ok(id)
+    }
+
+    /// Sets an instance's near-field settings (selection mode, proxy use); ignored by far-field
+    /// luminaires.
+    pub fn set_nearfield_settings(&mut self, id: InstanceId, settings: NearfieldSettings) -> Result<(), GpuError> {
+        let inst = self
+            .instances
+            .get_mut(&id)
+            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))?;
+        inst.nearfield = settings;
+        Ok(())
+    }
+
     /// A luminaire by id.
     pub fn luminaire(&self, id: LuminaireId) -> Result<&Luminaire, GpuError> {
         self.luminaires
@@ -113,7 +147,14 @@ impl Renderer {
         self.luminaire(luminaire)?;
         check_model(&model)?;
         let id = InstanceId(self.next());
-        self.instances.insert(id, Instance { luminaire, model });
+        self.instances.insert(
+            id,
+            Instance {
+                luminaire,
+                model,
+                nearfield: NearfieldSettings::default(),
+            },
+        );
         Ok(id)
     }
 
@@ -192,13 +233,27 @@ impl Renderer {
         camera: &HostCamera,
         options: &RenderOptions,
     ) -> Result<(), GpuError> {
-        let mut list: Vec<(&FarfieldLuminaire, Mat4)> = Vec::with_capacity(self.instances.len());
+        camera.validate()?;
+        options.validate(target)?;
+        self.ctx.check()?;
+        let mut far: Vec<(&FarfieldLuminaire, Mat4)> = Vec::with_capacity(self.instances.len());
+        let mut near: Vec<(Arc<NearfieldLuminaire>, Mat4, NearfieldSettings)> = Vec::new();
         for inst in self.instances.values() {
-            if let Some(Luminaire::Farfield(f)) = self.luminaires.get(&inst.luminaire) {
-                list.push((f.as_ref(), inst.model));
+            match self.luminaires.get(&inst.luminaire) {
+                Some(Luminaire::Farfield(f)) => far.push((f.as_ref(), inst.model)),
+                Some(Luminaire::Nearfield(n)) => near.push((n.clone(), inst.model, inst.nearfield)),
+                None => {}
             }
         }
-        self.farfield.render(&self.ctx, target, camera, options, &list)
+        let far_frame = self.farfield.prepare(&self.ctx, target, camera, options, &far)?;
+        let near_frame =
+            self.nearfield
+                .prepare(&self.ctx, target.desc.color, target.desc.depth, camera, options, &near)?;
+        let (farfield, nearfield) = (&self.farfield, &self.nearfield);
+        render_frame(&self.ctx, target, camera, |pass| {
+            farfield.draw(&far_frame, pass);
+            nearfield.draw(&near_frame, pass);
+        })
     }
 }
 

@@ -74,6 +74,9 @@ pub fn list_adapters(instance: &wgpu::Instance) -> Vec<(wgpu::Adapter, [u8; 16])
         .collect()
 }
 
+/// Storage buffers per shader stage the passes need.
+pub const NEEDED_STORAGE_BUFFERS: u32 = 16;
+
 /// Opens a device: the adapter whose device UUID equals `preferred_uuid` (an error if none does),
 /// else the first discrete GPU, integrated GPU, other, then CPU adapter. Requests
 /// `VULKAN_EXTERNAL_MEMORY_FD` when the adapter has it and adds `VK_KHR_external_semaphore_fd`
@@ -121,7 +124,18 @@ pub fn open_device(instance: &wgpu::Instance, preferred_uuid: Option<[u8; 16]>) 
         features |= wgpu::Features::VULKAN_EXTERNAL_MEMORY_FD;
     }
     let external_semaphore = adapter_has_extension(&adapter, ash::khr::external_semaphore_fd::NAME);
-    let limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+    let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
+    // The near-field pass binds 14 storage buffers in its fragment stage (tables, chunk map, counter,
+    // 8 pool pages of ≤ 128 MiB); lavapipe allows 32, real GPUs more.
+    let have = adapter.limits();
+    if have.max_storage_buffers_per_shader_stage < NEEDED_STORAGE_BUFFERS {
+        return Err(InteropError::Unsupported(format!(
+            "the adapter allows {} storage buffers per shader stage; lumiview needs {NEEDED_STORAGE_BUFFERS}",
+            have.max_storage_buffers_per_shader_stage
+        )));
+    }
+    limits.max_storage_buffers_per_shader_stage = NEEDED_STORAGE_BUFFERS;
+    limits.max_storage_buffer_binding_size = have.max_storage_buffer_binding_size.min(128 << 20);
     let desc = wgpu::DeviceDescriptor {
         label: Some("lumiview"),
         required_features: features,

@@ -98,6 +98,10 @@ enum Command {
     /// scale within 0.05 %, pages ≤ 128 MiB): from scan manifests, --synth, a TM-25 ray file or
     /// another .lvpack.
     Pack(commands::PackArgs),
+    /// Near-field quality harness: synthetic luminaires scanned, packed and rendered on the GPU in
+    /// each selection mode, compared with the exact ray-caster (docs/quality-metrics.md); prints the
+    /// table and writes the worst views as images.
+    Eval(commands::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -125,6 +129,7 @@ fn main() -> ExitCode {
         Command::Rays2scan(args) => commands::rays2scan(&args),
         Command::Synth(args) => commands::synth(&args),
         Command::Pack(args) => commands::pack(&args),
+        Command::Eval(args) => commands::eval(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

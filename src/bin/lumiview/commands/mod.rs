@@ -21,6 +21,7 @@ macro_rules! outln {
 
 // The macros above are visible in the submodules declared below (textual macro scope).
 mod cameras;
+mod eval;
 mod lut;
 mod pack;
 mod plot;
@@ -35,6 +36,7 @@ use lumiview::photometry::{self, LoadOptions, Photometry};
 use serde_json::json;
 
 pub use cameras::{cameras, CamerasArgs};
+pub use eval::{eval, EvalArgs};
 pub use lut::{lut, LutArgs};
 pub use pack::{pack, PackArgs};
 pub use plot::{plot, PlotArgs};

@@ -1,0 +1,456 @@
+// Near-field appearance pass: the measured luminance of a scanned luminaire (a `.lvpack` of capture
+// images on a capture sphere), seen from the host's camera.
+//
+// Per fragment (luminaire frame, metres):
+// 1. The fragment lies on the luminaire's proxy mesh (proxy mode: P is the surface point) or on a box
+//    around the content ball (bounding mode). v = unit view direction, from the eye into the scene.
+// 2. Q = the first point where the line P + t·v meets the capture sphere (t < 0: between the eye and
+//    the luminaire, or behind the eye when the eye is inside the sphere); u = unit(Q − centre). A camera
+//    at Q sees P along exactly the eye's line.
+// 3. Cameras around u are selected (nearest, idw4 or continuous barycentric weights over the spherical
+//    Delaunay triangulation; `src/nearfield/select/` builds the tables and documents them).
+// 4. Each selected camera is sampled (bilinear over pixel centres) where it sees the same point: the
+//    projection of P (proxy mode) or, without a proxy, the view direction v rotated into its frame
+//    (the "infinite-depth billboard").
+// 5. The weighted luminance (cd/m²) is written as linear luminance or tone mapped; depth is the proxy's,
+//    or the stand-in plane through the content centre facing the eye (bounding mode).
+//
+// Tiles are read from a pool of fixed-size chunks (residency: `src/gpu/nearfield.rs`): the pack's
+// tile tables and tile slots are cut into chunks; `chunk_map` maps a pack chunk to its GPU chunk (or
+// EMPTY when not resident). The CPU makes every chunk a frame can read resident before the frame; a
+// read of a missing chunk returns 0 and is counted in `misses` (tests assert the count stays 0).
+
+struct Draw {
+    // Luminaire frame -> wgpu clip space (host view · projection · model, depth range folded in).
+    clip_from_local: mat4x4<f32>,
+    // Eye in the luminaire frame: xyz = position (w = 1) or direction towards the eye (w = 0, orthographic).
+    eye_local: vec4<f32>,
+    // x = exposure (m²/cd), y = output (0 luminance, 1 tone mapped), z, w unused.
+    params: vec4<f32>,
+    // x = selection (0 nearest, 1 idw4, 2 continuous), y = 1 proxy mode / 0 bounding mode,
+    // z = bounding mode: 1 draw front faces (eye outside the box) / 0 back faces, w unused.
+    flags: vec4<u32>,
+};
+
+struct Lum {
+    // Capture sphere: centre xyz (m), radius (m).
+    sphere: vec4<f32>,
+    // Content ball: centre xyz (m), radius (m).
+    content: vec4<f32>,
+    // n_phi, n_theta, tile edge T (px), words per pool slot.
+    grid: vec4<u32>,
+    // Word offsets in `lists`: triangle offsets, triangle items, nearest offsets, nearest items.
+    lists_a: vec4<u32>,
+    // idw4 offsets, idw4 items, number of table chunks (slot-chunk maps follow them in chunk_map),
+    // slots per slot chunk.
+    lists_b: vec4<u32>,
+    // words per chunk, chunks per pool page, table entries per table chunk, unused.
+    pool: vec4<u32>,
+    // x = cos(max gap) for nearest/idw4, y, z, w unused.
+    gap: vec4<f32>,
+};
+
+@group(0) @binding(0) var<uniform> draw: Draw;
+
+@group(1) @binding(0) var<uniform> lum: Lum;
+// Per camera 6 × vec4<u32>: position.xyz (f32 bits), width | right.xyz, height | down.xyz, fx |
+// forward.xyz, fy | cx, cy (f32 bits), table offset, unused | bbox x0, y0, w, h (tiles).
+@group(1) @binding(1) var<storage, read> cameras: array<vec4<u32>>;
+// 3 × vec4 per triangle: (b×c, camera a), (c×a, camera b), (a×b, camera c); camera bits 0xFFFFFFFF = hole.
+@group(1) @binding(2) var<storage, read> tris: array<vec4<f32>>;
+// Per vertex: unit direction, camera bits.
+@group(1) @binding(3) var<storage, read> verts: array<vec4<f32>>;
+// The three CSR cell tables, concatenated (offsets at lum.lists_*).
+@group(1) @binding(4) var<storage, read> lists: array<u32>;
+// Pack chunk -> GPU chunk (0xFFFFFFFF: not resident): table chunks first, then slot chunks.
+@group(1) @binding(5) var<storage, read> chunk_map: array<u32>;
+@group(1) @binding(6) var<storage, read_write> misses: array<atomic<u32>>;
+@group(1) @binding(7) var<storage, read> pool0: array<u32>;
+@group(1) @binding(8) var<storage, read> pool1: array<u32>;
+@group(1) @binding(9) var<storage, read> pool2: array<u32>;
+@group(1) @binding(10) var<storage, read> pool3: array<u32>;
+@group(1) @binding(11) var<storage, read> pool4: array<u32>;
+@group(1) @binding(12) var<storage, read> pool5: array<u32>;
+@group(1) @binding(13) var<storage, read> pool6: array<u32>;
+@group(1) @binding(14) var<storage, read> pool7: array<u32>;
+
+const EMPTY: u32 = 0xFFFFFFFFu;
+const PI: f32 = 3.14159265358979;
+
+fn pool_word(chunk: u32, word: u32) -> u32 {
+    let per_page = lum.pool.y;
+    let page = chunk / per_page;
+    let i = (chunk % per_page) * lum.pool.x + word;
+    switch page {
+        case 0u: { return pool0[i]; }
+        case 1u: { return pool1[i]; }
+        case 2u: { return pool2[i]; }
+        case 3u: { return pool3[i]; }
+        case 4u: { return pool4[i]; }
+        case 5u: { return pool5[i]; }
+        case 6u: { return pool6[i]; }
+        default: { return pool7[i]; }
+    }
+}
+
+struct Cam {
+    pos: vec3<f32>,
+    right: vec3<f32>,
+    down: vec3<f32>,
+    forward: vec3<f32>,
+    size: vec2<u32>,
+    focal: vec2<f32>,
+    principal: vec2<f32>,
+    table: u32,
+    bbox: vec4<u32>,
+};
+
+fn camera(i: u32) -> Cam {
+    let a = cameras[6u * i];
+    let b = cameras[6u * i + 1u];
+    let c = cameras[6u * i + 2u];
+    let d = cameras[6u * i + 3u];
+    let e = cameras[6u * i + 4u];
+    var cam: Cam;
+    cam.pos = bitcast<vec3<f32>>(a.xyz);
+    cam.right = bitcast<vec3<f32>>(b.xyz);
+    cam.down = bitcast<vec3<f32>>(c.xyz);
+    cam.forward = bitcast<vec3<f32>>(d.xyz);
+    cam.size = vec2<u32>(a.w, b.w);
+    cam.focal = vec2<f32>(bitcast<f32>(c.w), bitcast<f32>(d.w));
+    cam.principal = bitcast<vec2<f32>>(e.xy);
+    cam.table = e.z;
+    cam.bbox = cameras[6u * i + 5u];
+    return cam;
+}
+
+// Stored luminance (cd/m²) of pixel (col, row) of a camera; 0 outside the image or where no tile is kept.
+fn texel(cam: Cam, col: i32, row: i32) -> f32 {
+    if (col < 0 || row < 0 || u32(col) >= cam.size.x || u32(row) >= cam.size.y) {
+        return 0.0;
+    }
+    let t = lum.grid.z;
+    let tx = u32(col) / t;
+    let ty = u32(row) / t;
+    if (tx < cam.bbox.x || ty < cam.bbox.y || tx - cam.bbox.x >= cam.bbox.z || ty - cam.bbox.y >= cam.bbox.w) {
+        return 0.0;
+    }
+    let entry = cam.table + (ty - cam.bbox.y) * cam.bbox.z + (tx - cam.bbox.x);
+    let tchunk = chunk_map[entry / lum.pool.z];
+    if (tchunk == EMPTY) {
+        atomicAdd(&misses[0], 1u);
+        return 0.0;
+    }
+    let slot = pool_word(tchunk, entry % lum.pool.z);
+    if (slot == EMPTY) {
+        return 0.0;
+    }
+    let per = lum.lists_b.w;
+    let schunk = chunk_map[lum.lists_b.z + slot / per];
+    if (schunk == EMPTY) {
+        atomicAdd(&misses[0], 1u);
+        return 0.0;
+    }
+    let base = (slot % per) * lum.grid.w;
+    let header = bitcast<f32>(pool_word(schunk, base));
+    let k = (u32(row) % t) * t + u32(col) % t;
+    if (header > 0.0) {
+        let pair = unpack2x16float(pool_word(schunk, base + 1u + k / 2u));
+        return select(pair.x, pair.y, (k & 1u) == 1u) * header;
+    }
+    // An f32 tile: exact values running on into the next slot (resident in the same chunk).
+    return bitcast<f32>(pool_word(schunk, base + 1u + k));
+}
+
+// Bilinear luminance at pixel coordinates (x, y) (pixel centres at +0.5).
+fn sample_camera(cam: Cam, px: vec2<f32>) -> f32 {
+    let s = px - vec2<f32>(0.5, 0.5);
+    let f0 = floor(s);
+    let f = s - f0;
+    let i = vec2<i32>(f0);
+    let a = texel(cam, i.x, i.y);
+    let b = texel(cam, i.x + 1, i.y);
+    let c = texel(cam, i.x, i.y + 1);
+    let d = texel(cam, i.x + 1, i.y + 1);
+    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+}
+
+// Luminance seen by camera `ci` at surface point p (proxy mode) or along direction v (bounding mode).
+fn camera_luminance(ci: u32, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
+    let cam = camera(ci);
+    var x: vec3<f32>;
+    if (proxy) {
+        x = p - cam.pos;
+    } else {
+        x = v;
+    }
+    let c = vec3<f32>(dot(x, cam.right), dot(x, cam.down), dot(x, cam.forward));
+    if (c.z <= 0.0) {
+        return 0.0;
+    }
+    let px = cam.principal + cam.focal * c.xy / c.z;
+    return sample_camera(cam, px);
+}
+
+fn cell_of(u: vec3<f32>) -> u32 {
+    var phi = atan2(u.y, u.x);
+    if (phi < 0.0) {
+        phi = phi + 2.0 * PI;
+    }
+    let theta = acos(clamp(u.z, -1.0, 1.0));
+    let np = lum.grid.x;
+    let nt = lum.grid.y;
+    let i = min(u32(floor(phi / (2.0 * PI) * f32(np))), np - 1u);
+    let j = min(u32(floor(theta / PI * f32(nt))), nt - 1u);
+    return j * np + i;
+}
+
+struct Selected {
+    cam: vec4<u32>,
+    w: vec4<f32>,
+};
+
+fn select_continuous(u: vec3<f32>, cell: u32) -> Selected {
+    var out: Selected;
+    out.cam = vec4<u32>(EMPTY);
+    out.w = vec4<f32>(0.0);
+    let start = lists[lum.lists_a.x + cell];
+    let end = lists[lum.lists_a.x + cell + 1u];
+    var best = -2.0;
+    var best_e = vec3<f32>(0.0);
+    var best_t = EMPTY;
+    for (var k = start; k < end; k = k + 1u) {
+        let t = lists[lum.lists_a.y + k];
+        let e = vec3<f32>(dot(u, tris[3u * t].xyz), dot(u, tris[3u * t + 1u].xyz), dot(u, tris[3u * t + 2u].xyz));
+        let m = min(e.x, min(e.y, e.z));
+        if (m > best) {
+            best = m;
+            best_e = e;
+            best_t = t;
+            if (m >= 0.0) {
+                break;
+            }
+        }
+    }
+    if (best_t == EMPTY) {
+        return out;
+    }
+    let ca = bitcast<u32>(tris[3u * best_t].w);
+    if (ca == EMPTY) {
+        return out;
+    }
+    let e = max(best_e, vec3<f32>(0.0));
+    let s = e.x + e.y + e.z;
+    if (s <= 0.0) {
+        return out;
+    }
+    out.cam = vec4<u32>(ca, bitcast<u32>(tris[3u * best_t + 1u].w), bitcast<u32>(tris[3u * best_t + 2u].w), EMPTY);
+    out.w = vec4<f32>(e / s, 0.0);
+    return out;
+}
+
+// Nearest (k = 1) or inverse-distance over the 4 nearest (k = 4), great-circle distances.
+fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
+    var out: Selected;
+    out.cam = vec4<u32>(EMPTY);
+    out.w = vec4<f32>(0.0);
+    var off = lum.lists_a.z;
+    var items = lum.lists_a.w;
+    if (k4) {
+        off = lum.lists_b.x;
+        items = lum.lists_b.y;
+    }
+    let start = lists[off + cell];
+    let end = lists[off + cell + 1u];
+    // Largest cosines first.
+    var cs = vec4<f32>(-2.0);
+    var ids = vec4<u32>(EMPTY);
+    var vid = vec4<u32>(0u);
+    for (var k = start; k < end; k = k + 1u) {
+        let vi = lists[items + k];
+        let v = verts[vi];
+        let c = dot(u, v.xyz);
+        if (c < lum.gap.x) {
+            continue;
+        }
+        let id = bitcast<u32>(v.w);
+        if (c > cs.x) {
+            cs = vec4<f32>(c, cs.xyz);
+            ids = vec4<u32>(id, ids.xyz);
+            vid = vec4<u32>(vi, vid.xyz);
+        } else if (c > cs.y) {
+            cs = vec4<f32>(cs.x, c, cs.yz);
+            ids = vec4<u32>(ids.x, id, ids.yz);
+            vid = vec4<u32>(vid.x, vi, vid.yz);
+        } else if (c > cs.z) {
+            cs = vec4<f32>(cs.xy, c, cs.z);
+            ids = vec4<u32>(ids.xy, id, ids.z);
+            vid = vec4<u32>(vid.xy, vi, vid.z);
+        } else if (c > cs.w) {
+            cs.w = c;
+            ids.w = id;
+            vid.w = vi;
+        }
+    }
+    if (ids.x == EMPTY) {
+        return out;
+    }
+    if (!k4) {
+        out.cam = vec4<u32>(ids.x, EMPTY, EMPTY, EMPTY);
+        out.w = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+        return out;
+    }
+    var w = vec4<f32>(0.0);
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        if (ids[i] != EMPTY) {
+            // Great-circle angle from the chord, 2·asin(|u − d| / 2): accurate for small angles, where
+            // fp32 acos(u · d) is not (acos of 1 − 2⁻²⁴ is already 3.5·10⁻⁴ rad).
+            let a = 2.0 * asin(min(0.5 * length(u - verts[vid[i]].xyz), 1.0));
+            if (a < 1e-7) {
+                out.cam = vec4<u32>(ids[i], EMPTY, EMPTY, EMPTY);
+                out.w = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+                return out;
+            }
+            w[i] = 1.0 / a;
+        }
+    }
+    out.cam = ids;
+    out.w = w / (w.x + w.y + w.z + w.w);
+    return out;
+}
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) local_pos: vec3<f32>,
+};
+
+@vertex
+fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
+    var out: VsOut;
+    out.clip = draw.clip_from_local * vec4<f32>(pos, 1.0);
+    out.local_pos = pos;
+    return out;
+}
+
+struct Shaded {
+    l: f32,
+    // Whether anything is drawn (bounding mode discards where no camera sees light).
+    keep: bool,
+    // Window depth of the stand-in plane (bounding mode), or the rasterised depth.
+    depth: f32,
+};
+
+fn shade(in: VsOut, front: bool) -> Shaded {
+    var out: Shaded;
+    out.keep = false;
+    out.l = 0.0;
+    out.depth = in.clip.z;
+    let proxy = draw.flags.y == 1u;
+    if (!proxy && (front != (draw.flags.z == 1u))) {
+        return out;
+    }
+    let p = in.local_pos;
+    var v: vec3<f32>;
+    if (draw.eye_local.w > 0.5) {
+        v = normalize(p - draw.eye_local.xyz);
+    } else {
+        v = -normalize(draw.eye_local.xyz);
+    }
+    let s = lum.sphere.xyz;
+    let r = lum.sphere.w;
+    // The line must pass through the content ball (bounding mode draws a box around it).
+    let oc = p - lum.content.xyz;
+    let bc = dot(oc, v);
+    let dc = dot(oc, oc) - bc * bc;
+    if (!proxy && dc > lum.content.w * lum.content.w) {
+        return out;
+    }
+    // First intersection of the line with the capture sphere.
+    let os = p - s;
+    let b = dot(os, v);
+    let disc = b * b - (dot(os, os) - r * r);
+    if (disc < 0.0) {
+        return out;
+    }
+    let t = -b - sqrt(disc);
+    let q = p + t * v;
+    let u = normalize(q - s);
+    let cell = cell_of(u);
+    var sel: Selected;
+    if (draw.flags.x == 2u) {
+        sel = select_continuous(u, cell);
+    } else {
+        sel = select_nearest(u, cell, draw.flags.x == 1u);
+    }
+    // The point on the line closest to the content centre (bounding mode samples along v only).
+    let pc = p - bc * v;
+    var l = 0.0;
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
+            l = l + sel.w[i] * camera_luminance(sel.cam[i], p, v, proxy);
+        }
+    }
+    out.l = l;
+    if (proxy) {
+        out.keep = true;
+    } else {
+        out.keep = l > 0.0;
+        // Stand-in depth: the plane through the content centre facing the eye.
+        var n: vec3<f32>;
+        if (draw.eye_local.w > 0.5) {
+            n = normalize(draw.eye_local.xyz - lum.content.xyz);
+        } else {
+            n = normalize(draw.eye_local.xyz);
+        }
+        let dn = dot(v, n);
+        var x = pc;
+        if (abs(dn) > 1e-6) {
+            x = p + (dot(lum.content.xyz - p, n) / dn) * v;
+        }
+        let c = draw.clip_from_local * vec4<f32>(x, 1.0);
+        out.depth = clamp(c.z / c.w, 0.0, 1.0);
+    }
+    return out;
+}
+
+fn tone_map(l: f32) -> f32 {
+    let x = max(l * draw.params.x, 0.0);
+    return x / (1.0 + x);
+}
+
+fn color_of(l: f32) -> vec4<f32> {
+    if (draw.params.y > 0.5) {
+        let t = tone_map(l);
+        return vec4<f32>(t, t, t, 1.0);
+    }
+    return vec4<f32>(l, l, l, 1.0);
+}
+
+struct FsOut {
+    @location(0) color: vec4<f32>,
+    @location(1) depth: vec4<f32>,
+    @builtin(frag_depth) frag_depth: f32,
+};
+
+struct FsOutColor {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) frag_depth: f32,
+};
+
+@fragment
+fn fs_main(in: VsOut, @builtin(front_facing) front: bool) -> FsOut {
+    let s = shade(in, front);
+    if (!s.keep) {
+        discard;
+    }
+    return FsOut(color_of(s.l), vec4<f32>(s.depth, 0.0, 0.0, 1.0), s.depth);
+}
+
+@fragment
+fn fs_main_color_only(in: VsOut, @builtin(front_facing) front: bool) -> FsOutColor {
+    let s = shade(in, front);
+    if (!s.keep) {
+        discard;
+    }
+    return FsOutColor(color_of(s.l), s.depth);
+}

@@ -1,0 +1,108 @@
+//! `lumiview eval`: the near-field quality harness (docs/quality-metrics.md). Synthetic luminaires are
+//! scanned, packed, rendered on the GPU in every selection mode from views outside and inside the
+//! capture sphere, from held-out capture cameras, orthographically (intensity, flux) and along a sweep
+//! in 0.05° steps, and compared with the exact ray-caster; the table goes to stdout, the worst views
+//! to `--images` as PNGs.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use lumiview::eval::{evaluate, format_table, EvalConfig, EvalMode};
+use lumiview::gpu::{ContextDesc, Renderer};
+use lumiview::nearfield::synth::NAMES;
+
+use super::CliResult;
+
+/// Arguments of `lumiview eval`.
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Synthetic luminaires to evaluate (repeat or comma-separate); default: all of them.
+    #[arg(long = "luminaire", value_delimiter = ',', value_name = "NAME")]
+    pub luminaires: Vec<String>,
+    /// Modes to compare: nearest, idw4, continuous, continuous+proxy (comma-separated).
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "nearest,idw4,continuous,continuous+proxy"
+    )]
+    pub modes: Vec<String>,
+    /// `rigo` capture cameras per hemisphere (10 % are held out).
+    #[arg(long, default_value_t = 2000)]
+    pub cameras: usize,
+    /// Largest capture image side in pixels (the pitch rule is relaxed beyond it, and the table says so).
+    #[arg(long, default_value_t = 1024)]
+    pub max_capture_px: u32,
+    /// Largest view side in pixels (larger views are cropped to their centre).
+    #[arg(long, default_value_t = 256)]
+    pub max_view_px: u32,
+    /// Camera spacings the continuity sweep covers (0.05° steps).
+    #[arg(long, default_value_t = 3.0)]
+    pub sweep_spacings: f64,
+    /// Where synthetic scans are packed and cached (reused when the cameras match).
+    #[arg(long, default_value = "target/eval")]
+    pub work_dir: PathBuf,
+    /// Write the worst outside and inside view of each luminaire and mode here as PNGs
+    /// (render | reference | relative error).
+    #[arg(long, value_name = "DIR")]
+    pub images: Option<PathBuf>,
+    /// Also write the table here.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+fn parse_mode(s: &str) -> Result<EvalMode, String> {
+    EvalMode::ALL
+        .into_iter()
+        .find(|m| m.label() == s.trim())
+        .ok_or_else(|| {
+            let names: Vec<&str> = EvalMode::ALL.iter().map(|m| m.label()).collect();
+            format!("--modes: unknown mode '{s}'; expected {}", names.join(", "))
+        })
+}
+
+/// Runs `lumiview eval`.
+pub fn eval(a: &EvalArgs) -> CliResult {
+    let names: Vec<String> = if a.luminaires.is_empty() {
+        NAMES.iter().map(|s| s.to_string()).collect()
+    } else {
+        a.luminaires.clone()
+    };
+    for n in &names {
+        if !NAMES.contains(&n.as_str()) {
+            return Err(format!("--luminaire: unknown name '{n}'; expected one of: {}", NAMES.join(", ")).into());
+        }
+    }
+    let modes = a.modes.iter().map(|m| parse_mode(m)).collect::<Result<Vec<_>, _>>()?;
+    if a.cameras < 20 {
+        return Err(format!("--cameras {}: expected at least 20 per hemisphere", a.cameras).into());
+    }
+    if !(a.sweep_spacings.is_finite() && a.sweep_spacings > 0.0) {
+        return Err(format!("--sweep-spacings {}: expected a positive number", a.sweep_spacings).into());
+    }
+    let cfg = EvalConfig {
+        per_hemisphere: a.cameras,
+        max_capture_px: a.max_capture_px.max(32),
+        max_view_px: a.max_view_px.max(16),
+        sweep_spacings: a.sweep_spacings,
+        modes,
+        work_dir: a.work_dir.clone(),
+        images_dir: a.images.clone(),
+        ..EvalConfig::default()
+    };
+    let mut r = Renderer::new(&ContextDesc::default())?;
+    eprintln!("lumiview eval on {}", r.ctx.caps.adapter_name);
+    let progress = |m: &str| eprintln!("  {m}");
+    let mut reports = Vec::new();
+    for n in &names {
+        let rep = evaluate(&mut r, n, &cfg, &progress)?;
+        // Print as we go: a full run takes a while.
+        eprint!("{}", format_table(std::slice::from_ref(&rep)));
+        reports.push(rep);
+    }
+    let table = format_table(&reports);
+    print!("{table}");
+    if let Some(o) = &a.output {
+        std::fs::write(o, &table).map_err(|e| format!("{}: {e}", o.display()))?;
+    }
+    Ok(())
+}

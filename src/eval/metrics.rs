@@ -1,0 +1,277 @@
+//! The per-view metrics of docs/quality-metrics.md, on luminance images (cd/m², row-major).
+
+/// Luminance of "lit" pixels: above this fraction of the view's reference maximum.
+pub const LIT_FRACTION: f32 = 1e-3;
+
+/// Largest max/min ratio of a 5 × 5 reference neighbourhood for an interior pixel.
+pub const INTERIOR_RATIO: f32 = 1.25;
+
+/// Fewest interior pixels for the pixel metrics to be reported.
+pub const MIN_INTERIOR: usize = 50;
+
+/// Relative error above which an interior pixel counts towards the doubled-pattern score.
+pub const DOUBLED_ERROR: f64 = 0.25;
+
+/// Metrics of one view (render against reference).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ViewMetrics {
+    /// Lit reference pixels.
+    pub lit: usize,
+    /// Interior pixels.
+    pub interior: usize,
+    /// Log-luminance RMSE over interior pixels (`None`: fewer than [`MIN_INTERIOR`]).
+    pub log_rmse: Option<f64>,
+    /// Median relative error over interior pixels.
+    pub median_rel: Option<f64>,
+    /// 95th-percentile relative error over interior pixels.
+    pub p95_rel: Option<f64>,
+    /// Log-luminance RMSE over all lit pixels.
+    pub all_lit_log_rmse: Option<f64>,
+    /// Silhouette displacement (px).
+    pub silhouette_px: f64,
+    /// Fraction of interior pixels with a relative error above [`DOUBLED_ERROR`].
+    pub doubled: Option<f64>,
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    // Nearest rank.
+    let n = sorted.len();
+    let k = ((q * n as f64).ceil() as usize).clamp(1, n);
+    sorted[k - 1]
+}
+
+/// Compares a render with its reference (both `w × h`, cd/m²). Non-finite render values count as 0.
+pub fn compare_view(render: &[f32], reference: &[f32], w: usize, h: usize) -> ViewMetrics {
+    let n = w * h;
+    if render.len() < n || reference.len() < n || n == 0 {
+        return ViewMetrics::default();
+    }
+    let lmax = reference[..n].iter().cloned().fold(0.0f32, f32::max);
+    if lmax <= 0.0 {
+        return ViewMetrics::default();
+    }
+    let thr = LIT_FRACTION * lmax;
+    let floor = 1e-6 * f64::from(lmax);
+    let r = |i: usize| -> f64 {
+        let v = render[i];
+        if v.is_finite() {
+            f64::from(v)
+        } else {
+            0.0
+        }
+    };
+    let lit_t: Vec<bool> = reference[..n].iter().map(|v| *v > thr).collect();
+    let lit_r: Vec<bool> = (0..n).map(|i| r(i) > f64::from(thr)).collect();
+    let mut rel = Vec::new();
+    let mut log2 = 0.0;
+    let mut all_log2 = 0.0;
+    let mut lit = 0usize;
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !lit_t[i] {
+                continue;
+            }
+            lit += 1;
+            let t = f64::from(reference[i]);
+            let lr = (r(i).max(floor) / t).log10();
+            all_log2 += lr * lr;
+            if x < 2 || y < 2 || x + 2 >= w || y + 2 >= h {
+                continue;
+            }
+            let (mut lo, mut hi) = (f32::MAX, 0.0f32);
+            for yy in y - 2..=y + 2 {
+                for xx in x - 2..=x + 2 {
+                    let v = reference[yy * w + xx];
+                    lo = lo.min(v);
+                    hi = hi.max(v);
+                }
+            }
+            if lo <= thr || hi > INTERIOR_RATIO * lo {
+                continue;
+            }
+            rel.push((r(i) - t).abs() / t);
+            log2 += lr * lr;
+        }
+    }
+    let interior = rel.len();
+    let mut out = ViewMetrics {
+        lit,
+        interior,
+        all_lit_log_rmse: (lit > 0).then(|| (all_log2 / lit as f64).sqrt()),
+        ..Default::default()
+    };
+    // Silhouette displacement: disagreement area over the reference perimeter.
+    let mut xor = 0usize;
+    let mut perimeter = 0usize;
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if lit_t[i] != lit_r[i] {
+                xor += 1;
+            }
+            if lit_t[i] {
+                let edge = (x == 0 || !lit_t[i - 1])
+                    || (x + 1 == w || !lit_t[i + 1])
+                    || (y == 0 || !lit_t[i - w])
+                    || (y + 1 == h || !lit_t[i + w]);
+                if edge {
+                    perimeter += 1;
+                }
+            }
+        }
+    }
+    out.silhouette_px = if perimeter > 0 {
+        xor as f64 / perimeter as f64
+    } else {
+        0.0
+    };
+    if interior >= MIN_INTERIOR {
+        out.log_rmse = Some((log2 / interior as f64).sqrt());
+        out.doubled = Some(rel.iter().filter(|e| **e > DOUBLED_ERROR).count() as f64 / interior as f64);
+        rel.sort_by(|a, b| a.total_cmp(b));
+        out.median_rel = Some(percentile(&rel, 0.5));
+        out.p95_rel = Some(percentile(&rel, 0.95));
+    }
+    out
+}
+
+/// Relative L1 change between consecutive images, Σ|b − a| / Σ a, over the pixels where `mask` holds.
+pub fn relative_change(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
+    let (mut d, mut s) = (0.0f64, 0.0f64);
+    for ((x, y), m) in a.iter().zip(b).zip(mask) {
+        if *m {
+            d += f64::from((y - x).abs());
+            s += f64::from(*x);
+        }
+    }
+    if s > 0.0 {
+        d / s
+    } else {
+        0.0
+    }
+}
+
+/// Aggregate of a set of views (docs/quality-metrics.md): mean log RMSE, median of medians, largest
+/// p95, largest silhouette displacement, largest doubled-pattern score; `None` where any view lacks
+/// the metric.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SetMetrics {
+    /// Views in the set.
+    pub views: usize,
+    /// Mean of the views' log RMSE.
+    pub log_rmse: Option<f64>,
+    /// Median of the views' median relative errors.
+    pub median_rel: Option<f64>,
+    /// Largest p95 relative error.
+    pub p95_rel: Option<f64>,
+    /// Mean all-lit log RMSE.
+    pub all_lit_log_rmse: Option<f64>,
+    /// Largest silhouette displacement (px).
+    pub silhouette_px: f64,
+    /// Largest doubled-pattern score.
+    pub doubled: Option<f64>,
+}
+
+/// Aggregates view metrics.
+pub fn aggregate(views: &[ViewMetrics]) -> SetMetrics {
+    let all = |f: &dyn Fn(&ViewMetrics) -> Option<f64>| -> Option<Vec<f64>> { views.iter().map(f).collect() };
+    let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
+    let max = |v: Vec<f64>| v.into_iter().reduce(f64::max);
+    SetMetrics {
+        views: views.len(),
+        log_rmse: all(&|m| m.log_rmse).and_then(mean),
+        median_rel: all(&|m| m.median_rel).and_then(|mut v| {
+            v.sort_by(|a, b| a.total_cmp(b));
+            (!v.is_empty()).then(|| v[(v.len() - 1) / 2])
+        }),
+        p95_rel: all(&|m| m.p95_rel).and_then(max),
+        all_lit_log_rmse: all(&|m| m.all_lit_log_rmse).and_then(mean),
+        silhouette_px: views.iter().map(|m| m.silhouette_px).fold(0.0, f64::max),
+        doubled: all(&|m| m.doubled).and_then(max),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn disc(w: usize, h: usize, cx: f64, r: f64, l: f32) -> Vec<f32> {
+        let mut v = vec![0.0; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as f64 + 0.5 - cx, y as f64 + 0.5 - h as f64 / 2.0);
+                if dx * dx + dy * dy < r * r {
+                    v[y * w + x] = l;
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn identical_images_score_zero_and_a_uniform_error_is_measured() {
+        let t = disc(64, 64, 32.0, 20.0, 1000.0);
+        let m = compare_view(&t, &t, 64, 64);
+        assert!(m.interior > 500 && m.lit > m.interior);
+        assert_eq!(m.log_rmse, Some(0.0));
+        assert_eq!(m.median_rel, Some(0.0));
+        assert_eq!(m.silhouette_px, 0.0);
+        let r: Vec<f32> = t.iter().map(|v| v * 1.02).collect();
+        let m = compare_view(&r, &t, 64, 64);
+        assert!((m.median_rel.unwrap() - 0.02).abs() < 1e-6);
+        assert!((m.log_rmse.unwrap() - 1.02f64.log10()).abs() < 1e-6);
+        assert_eq!(m.doubled, Some(0.0));
+    }
+
+    #[test]
+    fn a_shifted_silhouette_is_measured_in_pixels() {
+        let t = disc(128, 128, 64.0, 30.0, 10.0);
+        let r = disc(128, 128, 66.0, 30.0, 10.0);
+        let m = compare_view(&r, &t, 128, 128);
+        // A disc moved by 2 px: the symmetric difference is about 4r·2 px², the perimeter 2πr px.
+        let expect = 4.0 * 30.0 * 2.0 / (2.0 * std::f64::consts::PI * 30.0);
+        assert!((m.silhouette_px - expect).abs() < 0.35 * expect, "{}", m.silhouette_px);
+        // Interior pixels are 2 px from the reference edge, so a 2 px shift leaves them untouched
+        // on one side only partly: the doubled score sees the band.
+        assert!(m.doubled.unwrap() > 0.0);
+    }
+
+    #[test]
+    fn tiny_features_report_no_pixel_metrics() {
+        let mut t = vec![0.0f32; 32 * 32];
+        t[16 * 32 + 16] = 5.0;
+        let m = compare_view(&t, &t, 32, 32);
+        assert_eq!(m.lit, 1);
+        assert_eq!(m.interior, 0);
+        assert!(m.log_rmse.is_none() && m.median_rel.is_none());
+    }
+
+    #[test]
+    fn relative_change_and_aggregate() {
+        let a = vec![1.0f32, 2.0, 3.0];
+        let b = vec![1.0f32, 2.5, 3.0];
+        assert!((relative_change(&a, &b, &[true; 3]) - 0.5 / 6.0).abs() < 1e-12);
+        let v = [
+            ViewMetrics {
+                log_rmse: Some(0.01),
+                median_rel: Some(0.02),
+                p95_rel: Some(0.05),
+                silhouette_px: 0.5,
+                ..Default::default()
+            },
+            ViewMetrics {
+                log_rmse: Some(0.03),
+                median_rel: Some(0.01),
+                p95_rel: Some(0.07),
+                silhouette_px: 0.2,
+                ..Default::default()
+            },
+        ];
+        let s = aggregate(&v);
+        assert!((s.log_rmse.unwrap() - 0.02).abs() < 1e-12);
+        assert_eq!(s.p95_rel, Some(0.07));
+        assert_eq!(s.silhouette_px, 0.5);
+        assert_eq!(s.median_rel, Some(0.01));
+    }
+}

@@ -1,0 +1,718 @@
+//! The near-field quality harness: synthetic luminaires scanned, packed, rendered on the GPU from
+//! novel views in every selection mode, and compared with the exact ray-caster, by the definitions of
+//! docs/quality-metrics.md (the contract; [`metrics`] implements its per-view part).
+//!
+//! [`evaluate`] runs one luminaire and returns a [`LuminaireReport`]; [`format_table`] prints reports
+//! as the table `lumiview eval` shows; [`write_triptych`] writes a view as render | reference | error.
+
+pub mod metrics;
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{DVec2, DVec3, Mat4};
+
+use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
+use crate::gpu::{
+    Attachment, ColorFormat, DepthFormat, GpuError, HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc,
+};
+use crate::nearfield::layout::Layout;
+use crate::nearfield::pack::{write_pack, Pack, PackOptions};
+use crate::nearfield::proxy::triangles_of;
+use crate::nearfield::rayset::look_at_basis;
+use crate::nearfield::select::SelectionMode;
+use crate::nearfield::synth::{self, render_pinhole, Luminaire, SynthOptions, SynthSource};
+use crate::nearfield::{Camera, Hemisphere, Intrinsics, RayImageSet, Scan};
+
+pub use metrics::{aggregate, compare_view, SetMetrics, ViewMetrics};
+
+/// A rendering mode the harness compares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EvalMode {
+    /// The reference viewer: nearest camera, no proxy.
+    Nearest,
+    /// Four-nearest inverse-distance blend, no proxy.
+    Idw4,
+    /// Continuous (barycentric) selection, no proxy.
+    Continuous,
+    /// Continuous selection with the luminaire's proxy mesh.
+    ContinuousProxy,
+}
+
+impl EvalMode {
+    /// All modes, reference first.
+    pub const ALL: [EvalMode; 4] = [
+        EvalMode::Nearest,
+        EvalMode::Idw4,
+        EvalMode::Continuous,
+        EvalMode::ContinuousProxy,
+    ];
+
+    /// Short label.
+    pub fn label(self) -> &'static str {
+        match self {
+            EvalMode::Nearest => "nearest",
+            EvalMode::Idw4 => "idw4",
+            EvalMode::Continuous => "continuous",
+            EvalMode::ContinuousProxy => "continuous+proxy",
+        }
+    }
+
+    fn settings(self) -> NearfieldSettings {
+        match self {
+            EvalMode::Nearest => NearfieldSettings {
+                mode: SelectionMode::Nearest,
+                proxy: false,
+            },
+            EvalMode::Idw4 => NearfieldSettings {
+                mode: SelectionMode::Idw4,
+                proxy: false,
+            },
+            EvalMode::Continuous => NearfieldSettings {
+                mode: SelectionMode::Continuous,
+                proxy: false,
+            },
+            EvalMode::ContinuousProxy => NearfieldSettings {
+                mode: SelectionMode::Continuous,
+                proxy: true,
+            },
+        }
+    }
+}
+
+/// What the harness does (docs/quality-metrics.md, "Evaluation set-up").
+#[derive(Debug, Clone, PartialEq)]
+pub struct EvalConfig {
+    /// `rigo` cameras per hemisphere of the scan.
+    pub per_hemisphere: usize,
+    /// Capture radius (m).
+    pub radius_m: f64,
+    /// Largest capture image side (px); the pitch rule is relaxed (and the report says so) beyond it.
+    pub max_capture_px: u32,
+    /// Largest view side (px): larger views are cropped to their centre (a close-up).
+    pub max_view_px: u32,
+    /// Eye distances (m) outside the capture sphere.
+    pub outside_m: Vec<f64>,
+    /// Eye distances (m) inside it.
+    pub inside_m: Vec<f64>,
+    /// View directions (γ, C) in degrees.
+    pub directions_deg: Vec<(f64, f64)>,
+    /// Held-out views (at most).
+    pub held_out_views: usize,
+    /// Fibonacci directions of the flux quadrature over the sphere.
+    pub flux_directions: usize,
+    /// Largest orthographic view side (px).
+    pub max_ortho_px: u32,
+    /// Sweep: camera spacings covered, and the step (degrees).
+    pub sweep_spacings: f64,
+    /// Sweep step (degrees).
+    pub sweep_step_deg: f64,
+    /// Largest sweep view side (px).
+    pub max_sweep_px: u32,
+    /// Modes compared.
+    pub modes: Vec<EvalMode>,
+    /// Where packs are written.
+    pub work_dir: PathBuf,
+    /// Where the worst views are written as images (render | reference | error), if anywhere.
+    pub images_dir: Option<PathBuf>,
+}
+
+impl Default for EvalConfig {
+    fn default() -> Self {
+        EvalConfig {
+            per_hemisphere: 2000,
+            radius_m: synth::scan::DEFAULT_RADIUS_M,
+            max_capture_px: 1024,
+            max_view_px: 256,
+            outside_m: vec![1.5, 2.5, 5.0],
+            inside_m: vec![0.3, 0.6, 1.0],
+            directions_deg: vec![(0.0, 10.0), (30.0, 100.0), (55.0, 200.0), (75.0, 300.0)],
+            held_out_views: 12,
+            flux_directions: 96,
+            max_ortho_px: 512,
+            sweep_spacings: 3.0,
+            sweep_step_deg: 0.05,
+            max_sweep_px: 128,
+            modes: EvalMode::ALL.to_vec(),
+            work_dir: std::env::temp_dir().join("lumiview-eval"),
+            images_dir: None,
+        }
+    }
+}
+
+/// The smallest feature (m) of a synthetic luminaire the captures must resolve (docs/synthetic.md):
+/// strip width, dot diameter, tile gap, peak diameter; `None` for smooth luminaires.
+pub fn smallest_feature_m(name: &str) -> Option<f64> {
+    match name {
+        "strips" => Some(0.001),
+        "led-dots" => Some(0.003),
+        "peak" => Some(0.005),
+        "two-planes" => Some(0.010),
+        "star-panel" => Some(0.010),
+        "reflector" => Some(0.006),
+        _ => None,
+    }
+}
+
+/// Results of one mode on one luminaire.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ModeReport {
+    /// The mode's label.
+    pub mode: String,
+    /// Views outside the capture sphere.
+    pub outside: SetMetrics,
+    /// Views inside it.
+    pub inside: SetMetrics,
+    /// Held-out capture cameras.
+    pub held_out: SetMetrics,
+    /// Median relative intensity error over the direction grid.
+    pub intensity_median: f64,
+    /// Largest relative intensity error.
+    pub intensity_max: f64,
+    /// Relative flux error against the same quadrature of the closed-form intensity.
+    pub flux_error: f64,
+    /// Largest excess change per sweep step (render change − reference change), as a fraction.
+    pub jump: f64,
+    /// Index of the worst outside view (by log RMSE or, lacking it, silhouette).
+    pub worst_view: Option<usize>,
+}
+
+/// Results on one luminaire.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct LuminaireReport {
+    /// The luminaire.
+    pub name: String,
+    /// Capture cameras (after holding out 10 %).
+    pub cameras: usize,
+    /// Capture image side (px).
+    pub capture_px: u32,
+    /// Capture pitch at the centre (mm).
+    pub pitch_mm: f64,
+    /// Notes (relaxed rules, moved eyes).
+    pub notes: Vec<String>,
+    /// The quadrature's own flux error against the closed form.
+    pub quadrature_flux_error: f64,
+    /// Per mode.
+    pub modes: Vec<ModeReport>,
+}
+
+/// A view: pose and intrinsics.
+#[derive(Debug, Clone)]
+pub struct View {
+    /// Camera (position, basis).
+    pub camera: Camera,
+    /// Intrinsics.
+    pub intrinsics: Intrinsics,
+}
+
+fn direction(gamma_deg: f64, c_deg: f64) -> DVec3 {
+    let (g, c) = (gamma_deg.to_radians(), c_deg.to_radians());
+    DVec3::new(g.sin() * c.cos(), g.sin() * c.sin(), -g.cos())
+}
+
+/// A view from `eye` looking at `target` with pixel pitch `pitch_m` at the target, framing a sphere
+/// of radius `rb` (cropped to `max_px`).
+pub fn framed_view(eye: DVec3, target: DVec3, rb: f64, pitch_m: f64, max_px: u32) -> View {
+    let to = target - eye;
+    let d = to.length();
+    let (right, down, forward) = look_at_basis(to);
+    let f = d / pitch_m;
+    let half_angle = (rb / d).min(0.999).asin();
+    let size = ((2.0 * f * half_angle.tan() / 0.9).ceil() as u32).clamp(8, max_px.max(8));
+    View {
+        camera: Camera {
+            position_m: eye,
+            right,
+            down,
+            forward,
+            intrinsics: None,
+            hemisphere: Hemisphere::Lower,
+            meta: Default::default(),
+            label: "view".into(),
+        },
+        intrinsics: Intrinsics {
+            width: size,
+            height: size,
+            principal_px: DVec2::splat(0.5 * f64::from(size)),
+            focal_px: DVec2::splat(f),
+        },
+    }
+}
+
+/// Renders luminance (cd/m²) of every instance in `r` from a pinhole view.
+pub fn render_view(r: &mut Renderer, targets: &mut Vec<RenderTarget>, view: &View) -> Result<Vec<f32>, GpuError> {
+    let k = &view.intrinsics;
+    let near = 0.01f32;
+    let far = (view.camera.position_m.length() + 3.0) as f32;
+    let cam = HostCamera::from_pinhole(&view.camera, k, near, far);
+    render_with(r, targets, &cam, k.width, k.height)
+}
+
+fn render_with(
+    r: &mut Renderer,
+    targets: &mut Vec<RenderTarget>,
+    cam: &HostCamera,
+    w: u32,
+    h: u32,
+) -> Result<Vec<f32>, GpuError> {
+    let pos = match targets.iter().position(|t| t.desc.width == w && t.desc.height == h) {
+        Some(p) => p,
+        None => {
+            targets.push(RenderTarget::new(
+                &r.ctx,
+                &TargetDesc {
+                    width: w,
+                    height: h,
+                    color: ColorFormat::Rgba32Float,
+                    depth: DepthFormat::None,
+                    exportable: false,
+                    semaphores: false,
+                },
+            )?);
+            if targets.len() > 8 {
+                targets.remove(0);
+            }
+            targets.len() - 1
+        }
+    };
+    let t = &mut targets[pos];
+    r.render(t, cam, &RenderOptions::default())?;
+    let px = t.read(&r.ctx, Attachment::Color)?;
+    Ok(px
+        .chunks_exact(16)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// Errors of the harness.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    /// The GPU side failed.
+    #[error(transparent)]
+    Gpu(#[from] GpuError),
+    /// The synthetic or pack side failed.
+    #[error(transparent)]
+    Nearfield(#[from] crate::nearfield::NearfieldError),
+}
+
+/// The scan of one luminaire: pack, held-out cameras, pitch.
+struct Prepared {
+    lum: Arc<dyn Luminaire>,
+    pack: Arc<Pack>,
+    held_out: Vec<(Camera, Intrinsics)>,
+    pitch_m: f64,
+    capture_px: u32,
+    rb: f64,
+    notes: Vec<String>,
+}
+
+fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prepared, EvalError> {
+    let lum: Arc<dyn Luminaire> = Arc::from(synth::luminaire(name)?);
+    let b = lum.bounds();
+    let rb = b.centre().length() + b.radius();
+    let mut notes = Vec::new();
+    let wanted = smallest_feature_m(name).map_or(0.002, |f| (f / 6.0).min(0.002));
+    // Image side that frames the bounding sphere at 80 % fill with this pitch at the centre.
+    let alpha = (rb / cfg.radius_m).asin();
+    let need_px = (2.0 * cfg.radius_m * alpha.tan() / (synth::scan::DEFAULT_FILL * wanted)).ceil() as u32;
+    let capture_px = need_px.clamp(32, cfg.max_capture_px);
+    if need_px > cfg.max_capture_px {
+        notes.push(format!(
+            "captures capped at {} px (the pitch rule asks {need_px} px)",
+            cfg.max_capture_px
+        ));
+    }
+    let opts = SynthOptions {
+        luminaire: name.into(),
+        layout: Layout::Rigo {
+            per_hemisphere: cfg.per_hemisphere,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        },
+        radius_m: cfg.radius_m,
+        size: (capture_px, capture_px),
+        ..SynthOptions::default()
+    };
+    let (_, set) = synth::synth_set(&opts)?;
+    let pitch_m = cfg.radius_m / set.intrinsics.focal_px.x;
+    // Hold out every tenth camera.
+    let mut kept = Vec::new();
+    let mut held_out = Vec::new();
+    for (i, c) in set.cameras.iter().enumerate() {
+        if i % 10 == 9 {
+            held_out.push((c.clone(), *set.intrinsics_of(i)));
+        } else {
+            kept.push(c.clone());
+        }
+    }
+    let kept_set = RayImageSet {
+        sphere: set.sphere,
+        intrinsics: set.intrinsics,
+        cameras: kept,
+    };
+    std::fs::create_dir_all(&cfg.work_dir).map_err(|e| crate::nearfield::NearfieldError::io(&cfg.work_dir, e))?;
+    let path = cfg
+        .work_dir
+        .join(format!("{name}-rigo{}-{capture_px}px.lvpack", cfg.per_hemisphere));
+    let reuse = Pack::open(&path)
+        .ok()
+        .filter(|p| p.image_count() == kept_set.cameras.len() && p.rayset().cameras == kept_set.cameras);
+    let pack = match reuse {
+        Some(p) => p,
+        None => {
+            progress(&format!(
+                "{name}: scanning {} cameras at {capture_px}² px ({:.2} mm pitch) and packing",
+                kept_set.cameras.len(),
+                pitch_m * 1e3
+            ));
+            let source = SynthSource::new(lum.clone(), kept_set.clone(), 1)?;
+            let scan = Scan {
+                set: kept_set,
+                source: Box::new(source),
+            };
+            write_pack(&scan, &path, &PackOptions::default(), &|_, _| {})?;
+            Pack::open(&path)?
+        }
+    };
+    Ok(Prepared {
+        lum,
+        pack: Arc::new(pack),
+        held_out,
+        pitch_m,
+        capture_px,
+        rb,
+        notes,
+    })
+}
+
+/// Evaluates one synthetic luminaire in every configured mode.
+pub fn evaluate(
+    r: &mut Renderer,
+    name: &str,
+    cfg: &EvalConfig,
+    progress: &dyn Fn(&str),
+) -> Result<LuminaireReport, EvalError> {
+    let p = prepare(name, cfg, progress)?;
+    let lum = p.lum.as_ref();
+    let proxy = triangles_of(&lum.proxy());
+    let id = r.add_pack(p.pack.clone(), Some(proxy), &NearfieldOptions::default())?;
+    let inst = r.add_instance(id, Mat4::IDENTITY)?;
+    let result = evaluate_loaded(r, inst, &p, cfg, progress);
+    r.remove_luminaire(id)?;
+    let (modes, quad, mut notes) = result?;
+    notes.extend(p.notes.iter().cloned());
+    Ok(LuminaireReport {
+        name: name.into(),
+        cameras: p.pack.image_count(),
+        capture_px: p.capture_px,
+        pitch_mm: p.pitch_m * 1e3,
+        notes,
+        quadrature_flux_error: quad,
+        modes,
+    })
+}
+
+type Loaded = (Vec<ModeReport>, f64, Vec<String>);
+
+fn evaluate_loaded(
+    r: &mut Renderer,
+    inst: crate::gpu::InstanceId,
+    p: &Prepared,
+    cfg: &EvalConfig,
+    progress: &dyn Fn(&str),
+) -> Result<Loaded, EvalError> {
+    let lum = p.lum.as_ref();
+    let centre = lum.bounds().centre();
+    let mut notes = Vec::new();
+    let mut targets = Vec::new();
+    // Views and their references.
+    let mut outside = Vec::new();
+    let mut inside = Vec::new();
+    for &(g, c) in &cfg.directions_deg {
+        let w = direction(g, c);
+        for &d in &cfg.outside_m {
+            outside.push(framed_view(centre + w * d, centre, p.rb, p.pitch_m, cfg.max_view_px));
+        }
+        for &d in &cfg.inside_m {
+            let min = p.rb + 0.05;
+            let d2 = if d < min {
+                notes.push(format!("inside eye at {d} m moved out to {min:.3} m"));
+                min
+            } else {
+                d
+            };
+            inside.push(framed_view(centre + w * d2, centre, p.rb, p.pitch_m, cfg.max_view_px));
+        }
+    }
+    notes.dedup();
+    let n_held = cfg.held_out_views.min(p.held_out.len());
+    let held: Vec<View> = (0..n_held)
+        .map(|i| {
+            let (c, k) = &p.held_out[i * p.held_out.len() / n_held.max(1)];
+            View {
+                camera: c.clone(),
+                intrinsics: *k,
+            }
+        })
+        // Held-out cameras that see nothing (the dark hemisphere) measure nothing.
+        .filter(|v| v.camera.forward.z > 0.05)
+        .collect();
+    progress(&format!(
+        "{}: ray-casting {} reference views",
+        lum.name(),
+        outside.len() + inside.len() + held.len()
+    ));
+    let reference =
+        |v: &View| -> Result<Vec<f32>, EvalError> { Ok(render_pinhole(lum, &v.camera, &v.intrinsics, 1)?.data) };
+    let refs_out: Vec<Vec<f32>> = outside.iter().map(reference).collect::<Result<_, _>>()?;
+    let refs_in: Vec<Vec<f32>> = inside.iter().map(reference).collect::<Result<_, _>>()?;
+    let refs_held: Vec<Vec<f32>> = held.iter().map(reference).collect::<Result<_, _>>()?;
+    // Intensity and flux directions.
+    let grid: Vec<DVec3> = [0.0, 45.0, 90.0]
+        .iter()
+        .flat_map(|c| [0.0, 10.0, 25.0, 40.0, 55.0, 70.0, 80.0].map(|g| direction(g, *c)))
+        .collect();
+    let fib = fibonacci(cfg.flux_directions);
+    let i_max = grid.iter().map(|w| lum.intensity_cd(*w)).fold(0.0, f64::max);
+    let phi_q: f64 =
+        fib.iter().map(|w| lum.intensity_cd(*w)).sum::<f64>() * 4.0 * std::f64::consts::PI / fib.len() as f64;
+    let quad = (phi_q - lum.flux_lm()).abs() / lum.flux_lm();
+    // Sweep.
+    let spacing = (4.0 * std::f64::consts::PI / (2.0 * cfg.per_hemisphere as f64))
+        .sqrt()
+        .to_degrees();
+    let steps = ((cfg.sweep_spacings * spacing / cfg.sweep_step_deg).ceil() as usize).max(2);
+    let sweep: Vec<View> = (0..=steps)
+        .map(|k| {
+            let w = direction(40.0, 10.0 + k as f64 * cfg.sweep_step_deg);
+            framed_view(centre + w * 2.0, centre, p.rb, p.pitch_m, cfg.max_sweep_px)
+        })
+        .collect();
+    progress(&format!("{}: ray-casting {} sweep references", lum.name(), sweep.len()));
+    let refs_sweep: Vec<Vec<f32>> = sweep.iter().map(reference).collect::<Result<_, _>>()?;
+    let mut reports = Vec::new();
+    for mode in &cfg.modes {
+        progress(&format!("{}: rendering {}", lum.name(), mode.label()));
+        r.set_nearfield_settings(inst, mode.settings())?;
+        let mut set = |views: &[View], refs: &[Vec<f32>]| -> Result<Vec<ViewMetrics>, EvalError> {
+            let mut out = Vec::new();
+            for (v, t) in views.iter().zip(refs) {
+                let img = render_view(r, &mut targets, v)?;
+                let k = &v.intrinsics;
+                out.push(compare_view(&img, t, k.width as usize, k.height as usize));
+            }
+            Ok(out)
+        };
+        let m_out = set(&outside, &refs_out)?;
+        let m_in = set(&inside, &refs_in)?;
+        let m_held = set(&held, &refs_held)?;
+        let worst_view = m_out
+            .iter()
+            .enumerate()
+            .max_by(|a, b| {
+                let key = |m: &ViewMetrics| m.log_rmse.unwrap_or(f64::INFINITY);
+                key(a.1).total_cmp(&key(b.1))
+            })
+            .map(|(i, _)| i);
+        if let Some(dir) = &cfg.images_dir {
+            let worst_in = m_in
+                .iter()
+                .enumerate()
+                .max_by(|a, b| {
+                    let key = |m: &ViewMetrics| m.log_rmse.unwrap_or(f64::INFINITY);
+                    key(a.1).total_cmp(&key(b.1))
+                })
+                .map(|(i, _)| i);
+            for (tag, views, refs, which) in [
+                ("outside", &outside, &refs_out, worst_view),
+                ("inside", &inside, &refs_in, worst_in),
+            ] {
+                if let Some(i) = which {
+                    let img = render_view(r, &mut targets, &views[i])?;
+                    let k = &views[i].intrinsics;
+                    let f = dir.join(format!(
+                        "{}-{}-{tag}-worst.png",
+                        lum.name(),
+                        mode.label().replace('+', "-")
+                    ));
+                    std::fs::create_dir_all(dir)
+                        .and_then(|_| write_triptych(&f, &img, &refs[i], k.width as usize, k.height as usize))
+                        .map_err(|e| crate::nearfield::NearfieldError::io(&f, e))?;
+                }
+            }
+        }
+        // Intensity.
+        let mut errs = Vec::new();
+        for w in &grid {
+            let i_true = lum.intensity_cd(*w);
+            if i_true <= 1e-2 * i_max {
+                continue;
+            }
+            let i_hat = ortho_intensity(r, &mut targets, *w, centre, p.rb, p.pitch_m, cfg.max_ortho_px)?;
+            errs.push((i_hat - i_true).abs() / i_true);
+        }
+        errs.sort_by(|a, b| a.total_cmp(b));
+        let mut phi_hat = 0.0;
+        for w in &fib {
+            if w.z < 0.0 {
+                phi_hat += ortho_intensity(r, &mut targets, *w, centre, p.rb, p.pitch_m, cfg.max_ortho_px)?;
+            }
+        }
+        phi_hat *= 4.0 * std::f64::consts::PI / fib.len() as f64;
+        // Sweep.
+        let mut prev: Option<Vec<f32>> = None;
+        let mut jump: f64 = 0.0;
+        for (k, v) in sweep.iter().enumerate() {
+            let img = render_view(r, &mut targets, v)?;
+            if let Some(a) = &prev {
+                let (t0, t1) = (&refs_sweep[k - 1], &refs_sweep[k]);
+                let lmax = t0.iter().cloned().fold(0.0f32, f32::max);
+                let mask: Vec<bool> = t0.iter().zip(t1).map(|(x, y)| x.max(*y) > 1e-3 * lmax).collect();
+                let jr = metrics::relative_change(a, &img, &mask);
+                let jt = metrics::relative_change(t0, t1, &mask);
+                jump = jump.max(jr - jt);
+            }
+            prev = Some(img);
+        }
+        reports.push(ModeReport {
+            mode: mode.label().into(),
+            outside: aggregate(&m_out),
+            inside: aggregate(&m_in),
+            held_out: aggregate(&m_held),
+            intensity_median: errs.get(errs.len().saturating_sub(1) / 2).copied().unwrap_or(f64::NAN),
+            intensity_max: errs.last().copied().unwrap_or(f64::NAN),
+            flux_error: (phi_hat - phi_q).abs() / phi_q,
+            jump,
+            worst_view,
+        });
+    }
+    Ok((reports, quad, notes))
+}
+
+/// Î(ω) = Σ L · p² over an orthographic render along −ω framing a sphere of radius `rb`.
+fn ortho_intensity(
+    r: &mut Renderer,
+    targets: &mut Vec<RenderTarget>,
+    w: DVec3,
+    centre: DVec3,
+    rb: f64,
+    pitch_m: f64,
+    max_px: u32,
+) -> Result<f64, EvalError> {
+    let size = ((2.0 * rb / pitch_m).ceil() as u32 + 2).clamp(8, max_px);
+    let pixel = 2.0 * rb / f64::from(size - 2);
+    let cam = HostCamera::from_ortho(w, centre, pixel, size, size, rb + 0.05);
+    let img = render_with(r, targets, &cam, size, size)?;
+    Ok(img.iter().map(|v| f64::from(*v)).sum::<f64>() * pixel * pixel)
+}
+
+/// `n` near-uniform directions on the sphere (Fibonacci spiral).
+pub fn fibonacci(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let rho = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(rho * a.cos(), rho * a.sin(), z)
+        })
+        .collect()
+}
+
+fn fmt_opt(v: Option<f64>, scale: f64, digits: usize) -> String {
+    v.map_or("n/a".into(), |x| format!("{:.*}", digits, x * scale))
+}
+
+/// The reports as a text table (one row per luminaire and mode).
+pub fn format_table(reports: &[LuminaireReport]) -> String {
+    let mut s = String::new();
+    s.push_str(&format!(
+        "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7}\n",
+        "luminaire",
+        "mode",
+        "logRMSE",
+        "med%",
+        "p95%",
+        "sil px",
+        "in lRMSE",
+        "in med%",
+        "dbl%",
+        "held lR",
+        "I med%",
+        "I max%",
+        "flux%",
+        "jump%"
+    ));
+    for rep in reports {
+        for m in &rep.modes {
+            s.push_str(&format!(
+                "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8.2} {:>8} {:>8} {:>8} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>7.3}\n",
+                rep.name,
+                m.mode,
+                fmt_opt(m.outside.log_rmse, 1.0, 4),
+                fmt_opt(m.outside.median_rel, 100.0, 3),
+                fmt_opt(m.outside.p95_rel, 100.0, 2),
+                m.outside.silhouette_px,
+                fmt_opt(m.inside.log_rmse, 1.0, 4),
+                fmt_opt(m.inside.median_rel, 100.0, 3),
+                fmt_opt(m.inside.doubled, 100.0, 2),
+                fmt_opt(m.held_out.log_rmse, 1.0, 4),
+                m.intensity_median * 100.0,
+                m.intensity_max * 100.0,
+                m.flux_error * 100.0,
+                m.jump * 100.0,
+            ));
+        }
+        s.push_str(&format!(
+            "{:<11} ({} cameras, {}² px, {:.3} mm pitch; quadrature flux error {:.3} %{})\n",
+            "",
+            rep.cameras,
+            rep.capture_px,
+            rep.pitch_mm,
+            rep.quadrature_flux_error * 100.0,
+            if rep.notes.is_empty() {
+                String::new()
+            } else {
+                format!("; {}", rep.notes.join("; "))
+            }
+        ));
+    }
+    s
+}
+
+/// Writes render | reference | relative error (red = render too bright, blue = too dark, full at
+/// ±10 %) side by side as an 8-bit PNG; luminance is shown on a log scale over 4 decades below the
+/// reference maximum.
+pub fn write_triptych(path: &Path, render: &[f32], reference: &[f32], w: usize, h: usize) -> std::io::Result<()> {
+    let lmax = reference.iter().cloned().fold(0.0f32, f32::max).max(1e-30);
+    let tone = |v: f32| -> u8 {
+        if v <= 0.0 {
+            return 0;
+        }
+        let t = ((v / lmax).log10() + 4.0) / 4.0;
+        (t.clamp(0.0, 1.0) * 255.0) as u8
+    };
+    let mut rgb = vec![0u8; 3 * w * 3 * h];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            let (a, b) = (render[i], reference[i]);
+            let row = y * 3 * w;
+            let ta = tone(a);
+            let tb = tone(b);
+            rgb[3 * (row + x)..3 * (row + x) + 3].copy_from_slice(&[ta, ta, ta]);
+            rgb[3 * (row + w + x)..3 * (row + w + x) + 3].copy_from_slice(&[tb, tb, tb]);
+            let e = if b > 1e-3 * lmax { (a - b) / b } else { 0.0 };
+            let m = ((e.abs() / 0.1).min(1.0) * 255.0) as u8;
+            let px = if e > 0.0 { [m, 0, 0] } else { [0, 0, m] };
+            rgb[3 * (row + 2 * w + x)..3 * (row + 2 * w + x) + 3].copy_from_slice(&px);
+        }
+    }
+    let f = std::fs::File::create(path)?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(f), 3 * w as u32, h as u32);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut wr = enc.write_header().map_err(std::io::Error::other)?;
+    wr.write_image_data(&rgb).map_err(std::io::Error::other)?;
+    Ok(())
+}

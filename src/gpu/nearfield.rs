@@ -1,0 +1,981 @@
+//! The near-field appearance pass: a scanned luminaire (`.lvpack`) drawn from the host's camera with
+//! the luminance its capture cameras measured (shaders/nearfield.wgsl says what each fragment does).
+//!
+//! A [`NearfieldLuminaire`] holds on the GPU: the camera records, the selection tables
+//! ([`Selection`]), a chunk map and a pool of residency chunks ([`super::residency`]) within a
+//! budget, plus its bounding box and optional proxy mesh. When the whole pack fits the budget it is
+//! uploaded once; otherwise each frame first makes resident every chunk of every camera the frame can
+//! select (found on the CPU from the view, conservatively), so a frame never reads a tile that is not
+//! there; a view that needs more than the budget is an error, never a partial image.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec3, Mat4, Vec4};
+
+use super::camera::HostCamera;
+use super::context::GpuContext;
+use super::farfield::{OutputMode, RenderOptions};
+use super::residency::{ChunkLayout, Residency, CHUNK_BYTES, EMPTY};
+use super::target::{ColorFormat, DepthFormat};
+use super::GpuError;
+use crate::nearfield::pack::Pack;
+use crate::nearfield::select::{Selection, SelectionMode, SelectionOptions};
+
+/// The near-field shader source.
+pub const SHADER: &str = include_str!("../../shaders/nearfield.wgsl");
+
+/// Pool pages a luminaire can bind (the shader declares this many).
+pub const MAX_POOL_PAGES: usize = 8;
+
+/// Largest pool page (lavapipe's storage-binding limit; also kind to real GPUs).
+pub const MAX_PAGE_BYTES: u64 = 128 << 20;
+
+/// Default GPU budget of one near-field luminaire (bytes).
+pub const DEFAULT_BUDGET_BYTES: u64 = 512 << 20;
+
+/// How a scan becomes a GPU luminaire.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NearfieldOptions {
+    /// GPU bytes this luminaire may hold: camera records, selection tables, chunk map and tile pool
+    /// together. The pool gets what the rest leaves, at most [`MAX_POOL_PAGES`] × 128 MiB.
+    pub budget_bytes: u64,
+    /// Radius (m) of the ball around the capture centre that holds everything the cameras saw;
+    /// `None` derives it from the cameras' tile bounding boxes (see [`content_radius_m`]).
+    pub content_radius_m: Option<f64>,
+    /// Selection-table options.
+    pub selection: SelectionOptions,
+}
+
+impl Default for NearfieldOptions {
+    fn default() -> Self {
+        NearfieldOptions {
+            budget_bytes: DEFAULT_BUDGET_BYTES,
+            content_radius_m: None,
+            selection: SelectionOptions::default(),
+        }
+    }
+}
+
+/// Per-instance settings of a near-field luminaire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct NearfieldSettings {
+    /// Camera selection.
+    pub mode: SelectionMode,
+    /// Use the proxy mesh (when the luminaire has one) for parallax-correct reprojection.
+    pub proxy: bool,
+}
+
+impl Default for NearfieldSettings {
+    fn default() -> Self {
+        NearfieldSettings {
+            mode: SelectionMode::Continuous,
+            proxy: true,
+        }
+    }
+}
+
+/// Radius (m) of a ball around the capture centre holding everything the pack's cameras saw: the
+/// largest `D · tan α` over cameras, where D is the camera's distance from the centre and α the
+/// largest angle from its optical axis to a corner of its kept tiles' bounding box (a point at
+/// distance r from the centre is seen at tan α = r / D by the cameras looking across it), plus 2 %.
+pub fn content_radius_m(pack: &Pack) -> f64 {
+    let set = pack.rayset();
+    let t = f64::from(pack.layout().tile_size);
+    let mut r: f64 = 0.0;
+    for (i, (cam, e)) in set.cameras.iter().zip(pack.images()).enumerate() {
+        if e.bbox.w == 0 || e.bbox.h == 0 {
+            continue;
+        }
+        let k = set.intrinsics_of(i);
+        let d = (cam.position_m - set.sphere.centre_m).length();
+        let (x0, y0) = (f64::from(e.bbox.x0) * t, f64::from(e.bbox.y0) * t);
+        let (x1, y1) = (x0 + f64::from(e.bbox.w) * t, y0 + f64::from(e.bbox.h) * t);
+        for (u, v) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
+            let ray = k.ray_camera(u, v);
+            let tan = (ray.x * ray.x + ray.y * ray.y).sqrt();
+            r = r.max(d * tan);
+        }
+    }
+    (r * 1.02).min(set.sphere.radius_m * 0.999)
+}
+
+/// A scanned luminaire on the GPU; instances share it.
+pub struct NearfieldLuminaire {
+    /// The pack it reads from.
+    pub pack: Arc<Pack>,
+    /// The selection tables.
+    pub selection: Arc<Selection>,
+    /// Capture centre (m, luminaire frame) and radius (m).
+    pub sphere: (DVec3, f64),
+    /// Radius (m) of the content ball around the capture centre.
+    pub content_radius_m: f64,
+    /// Whether the whole pack is resident (no streaming).
+    pub fully_resident: bool,
+    chunks: ChunkLayout,
+    residency: Mutex<Residency>,
+    chunk_map: wgpu::Buffer,
+    misses: wgpu::Buffer,
+    pages: Vec<wgpu::Buffer>,
+    chunks_per_page: u32,
+    bind: wgpu::BindGroup,
+    bounds: (wgpu::Buffer, u32),
+    proxy: Option<(wgpu::Buffer, u32)>,
+    gpu_bytes: u64,
+    budget_bytes: u64,
+}
+
+impl std::fmt::Debug for NearfieldLuminaire {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("NearfieldLuminaire")
+            .field("pack", &self.pack)
+            .field("content_radius_m", &self.content_radius_m)
+            .field("fully_resident", &self.fully_resident)
+            .field("gpu_bytes", &self.gpu_bytes)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Residency figures of a luminaire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ResidencyReport {
+    /// Bytes of every GPU buffer the luminaire holds (never above the budget).
+    pub gpu_bytes: u64,
+    /// The budget it was created with.
+    pub budget_bytes: u64,
+    /// Chunks the pool can hold.
+    pub capacity_chunks: u32,
+    /// Chunks resident now.
+    pub resident_chunks: u32,
+    /// Chunks the whole pack has.
+    pub total_chunks: u32,
+    /// Chunks uploaded so far.
+    pub uploads: u64,
+    /// Chunks evicted so far.
+    pub evictions: u64,
+}
+
+impl NearfieldLuminaire {
+    /// Residency figures.
+    pub fn residency(&self) -> ResidencyReport {
+        let r = self.residency.lock().unwrap_or_else(|p| p.into_inner());
+        ResidencyReport {
+            gpu_bytes: self.gpu_bytes,
+            budget_bytes: self.budget_bytes,
+            capacity_chunks: r.capacity(),
+            resident_chunks: r.resident() as u32,
+            total_chunks: self.chunks.all_needed().len() as u32,
+            uploads: r.uploads,
+            evictions: r.evictions,
+        }
+    }
+
+    /// Whether it has a proxy mesh.
+    pub fn has_proxy(&self) -> bool {
+        self.proxy.is_some()
+    }
+
+    /// Reads (and resets) the shader's count of reads of non-resident chunks. Waits for the GPU.
+    pub fn take_misses(&self, ctx: &GpuContext) -> Result<u32, GpuError> {
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("near-field misses read-back"),
+            size: 4,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.misses, 0, &staging, 0, 4);
+        enc.clear_buffer(&self.misses, 0, None);
+        ctx.queue.submit([enc.finish()]);
+        let slice = staging.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        ctx.wait_idle()?;
+        let v = {
+            let data = slice
+                .get_mapped_range()
+                .map_err(|e| GpuError::DeviceLost(format!("reading the near-field miss counter: {e}")))?;
+            u32::from_le_bytes([data[0], data[1], data[2], data[3]])
+        };
+        staging.unmap();
+        Ok(v)
+    }
+
+    /// Cameras any pixel of a view from `eye` (luminaire frame: w = 1 a point, w = 0 the direction
+    /// towards an orthographic eye) can select in `mode`: those listed in the selection cells that the
+    /// view's lines through the content ball reach on the capture sphere (conservative).
+    pub fn cameras_for_view(&self, eye: Vec4, mode: SelectionMode) -> Vec<u32> {
+        let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
+        self.selection.cameras_of_cells(mode, cells.into_iter())
+    }
+
+    fn make_resident(&self, ctx: &GpuContext, cameras: &[u32]) -> Result<(), GpuError> {
+        if self.fully_resident {
+            return Ok(());
+        }
+        let needed = self.chunks.chunks_of(cameras.iter().copied());
+        let mut r = self.residency.lock().unwrap_or_else(|p| p.into_inner());
+        let uploads = r
+            .make_resident(&needed)
+            .map_err(|m| GpuError::invalid("budget_bytes", m))?;
+        if uploads.is_empty() {
+            return Ok(());
+        }
+        for (g, c) in uploads {
+            let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
+            let page = (g / self.chunks_per_page) as usize;
+            let off = u64::from(g % self.chunks_per_page) * CHUNK_BYTES;
+            if !bytes.is_empty() {
+                ctx.queue.write_buffer(&self.pages[page], off, &bytes);
+            }
+        }
+        ctx.queue.write_buffer(&self.chunk_map, 0, bytemuck::cast_slice(&r.map));
+        Ok(())
+    }
+}
+
+/// The cells of `sel`'s grid that the lines of a view through the content ball reach on the capture
+/// sphere (first intersection of each line). Lines are sampled so that neighbouring samples land at
+/// most `step` apart on the sphere, and every cell within `step` of a sample is taken.
+pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, eye: Vec4) -> Vec<usize> {
+    let (s, r) = sphere;
+    let rc = content_radius_m.max(1e-6);
+    let (n_phi, n_theta) = sel.grid();
+    let cells = n_phi as usize * n_theta as usize;
+    let cell_rad = std::f64::consts::PI / f64::from(n_theta);
+    let step = 0.5 * cell_rad;
+    let mut mark = vec![false; cells];
+    let cos_i = (1.0 - (rc / r).min(0.995).powi(2)).sqrt();
+    let add = |q: DVec3, mark: &mut Vec<bool>| {
+        let u = (q - s).normalize_or_zero();
+        mark_cap(&mut mark[..], n_phi, n_theta, u, step + 1e-4);
+    };
+    let e = eye.truncate().as_dvec3();
+    let first_hit = |p: DVec3, v: DVec3| -> Option<DVec3> {
+        let os = p - s;
+        let b = os.dot(v);
+        let disc = b * b - (os.length_squared() - r * r);
+        (disc >= 0.0).then(|| p + (-b - disc.sqrt()) * v)
+    };
+    if eye.w > 0.5 {
+        let to_c = s - e;
+        let dist = to_c.length();
+        if dist <= rc * 1.0001 {
+            return (0..cells).collect();
+        }
+        let axis = to_c / dist;
+        let beta = (rc / dist).min(1.0).asin();
+        let amp = (dist + r) / (r * cos_i);
+        let n_r = ((beta * amp / step).ceil() as usize).clamp(1, 4096);
+        let (bx, by) = orthonormal(axis);
+        for k in 0..=n_r {
+            let a = beta * k as f64 / n_r as f64;
+            let n_a = ((std::f64::consts::TAU * a.sin() * amp / step).ceil() as usize).clamp(1, 65_536);
+            for m in 0..n_a {
+                let phi = std::f64::consts::TAU * m as f64 / n_a as f64;
+                let d = axis * a.cos() + (bx * phi.cos() + by * phi.sin()) * a.sin();
+                if let Some(q) = first_hit(e, d) {
+                    add(q, &mut mark);
+                }
+            }
+        }
+    } else {
+        let v = -e.normalize_or_zero();
+        let (bx, by) = orthonormal(v);
+        let spacing = step * r * cos_i;
+        let n = ((rc / spacing).ceil() as i64).clamp(1, 4096);
+        for i in -n..=n {
+            for j in -n..=n {
+                let (x, y) = (i as f64 * rc / n as f64, j as f64 * rc / n as f64);
+                if x * x + y * y > rc * rc * (1.0 + 2.0 / n as f64) {
+                    continue;
+                }
+                let p = s + bx * x + by * y;
+                if let Some(q) = first_hit(p, v) {
+                    add(q, &mut mark);
+                }
+            }
+        }
+    }
+    mark.iter().enumerate().filter(|(_, m)| **m).map(|(i, _)| i).collect()
+}
+
+fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
+    let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let x = a.cross(t).normalize();
+    (x, a.cross(x))
+}
+
+/// Marks every (φ, θ) cell within `radius` of `u` (conservatively through the cap's φ/θ range).
+fn mark_cap(mark: &mut [bool], n_phi: u32, n_theta: u32, u: DVec3, radius: f64) {
+    use std::f64::consts::{PI, TAU};
+    let theta = u.z.clamp(-1.0, 1.0).acos();
+    let mut phi = u.y.atan2(u.x);
+    if phi < 0.0 {
+        phi += TAU;
+    }
+    let (np, nt) = (n_phi as i64, n_theta as i64);
+    let j0 = (((theta - radius) / PI * nt as f64).floor() as i64).clamp(0, nt - 1);
+    let j1 = (((theta + radius) / PI * nt as f64).floor() as i64).clamp(0, nt - 1);
+    let all_phi = theta - radius <= 0.0 || theta + radius >= PI;
+    let (i0, i1) = if all_phi {
+        (0, np - 1)
+    } else {
+        let dphi = (radius.sin() / theta.sin()).min(1.0).asin() + 1e-9;
+        let a = ((phi - dphi) / TAU * np as f64).floor() as i64;
+        let b = ((phi + dphi) / TAU * np as f64).floor() as i64;
+        if b - a + 1 >= np {
+            (0, np - 1)
+        } else {
+            (a, b)
+        }
+    };
+    for j in j0..=j1 {
+        for i in i0..=i1 {
+            let ii = i.rem_euclid(np);
+            mark[(j * np + ii) as usize] = true;
+        }
+    }
+}
+
+/// Uniform block of one luminaire (matches `Lum` in shaders/nearfield.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct LumUniform {
+    sphere: [f32; 4],
+    content: [f32; 4],
+    grid: [u32; 4],
+    lists_a: [u32; 4],
+    lists_b: [u32; 4],
+    pool: [u32; 4],
+    gap: [f32; 4],
+}
+
+/// Uniform block of one draw (matches `Draw` in shaders/nearfield.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct DrawUniform {
+    clip_from_local: [[f32; 4]; 4],
+    eye_local: [f32; 4],
+    params: [f32; 4],
+    flags: [u32; 4],
+}
+
+const SLOT: u64 = 256;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PipelineKey {
+    color: ColorFormat,
+    depth_copy: bool,
+    reversed_z: bool,
+}
+
+/// Pipelines and layouts of the near-field pass.
+#[derive(Debug)]
+pub struct NearfieldPass {
+    module: wgpu::ShaderModule,
+    draw_layout: wgpu::BindGroupLayout,
+    lum_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    uniforms: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+}
+
+/// One prepared frame of the pass: draws whose uniforms are written.
+#[derive(Debug, Default)]
+pub struct NearfieldFrame {
+    draws: Vec<(usize, Arc<NearfieldLuminaire>, bool)>,
+    pipeline: Option<wgpu::RenderPipeline>,
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn buffer_init(ctx: &GpuContext, label: &str, bytes: &[u8], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    let size = (bytes.len() as u64).max(16).div_ceil(4) * 4;
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: usage | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    if !bytes.is_empty() {
+        let mut padded = bytes.to_vec();
+        padded.resize(padded.len().div_ceil(4) * 4, 0);
+        ctx.queue.write_buffer(&buf, 0, &padded);
+    }
+    buf
+}
+
+/// A box around the content ball (12 triangles, half-size = radius): bounding-mode geometry.
+fn bounding_box(centre: DVec3, r: f64) -> Vec<[f32; 3]> {
+    let c = centre.as_vec3();
+    let r = r as f32;
+    let v = |x: f32, y: f32, z: f32| [c.x + x * r, c.y + y * r, c.z + z * r];
+    let corners = [
+        v(-1.0, -1.0, -1.0),
+        v(1.0, -1.0, -1.0),
+        v(1.0, 1.0, -1.0),
+        v(-1.0, 1.0, -1.0),
+        v(-1.0, -1.0, 1.0),
+        v(1.0, -1.0, 1.0),
+        v(1.0, 1.0, 1.0),
+        v(-1.0, 1.0, 1.0),
+    ];
+    // Outward-facing, counter-clockwise seen from outside.
+    let quads = [
+        [0, 3, 2, 1],
+        [4, 5, 6, 7],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [1, 2, 6, 5],
+        [3, 0, 4, 7],
+    ];
+    let mut out = Vec::with_capacity(36);
+    for q in quads {
+        for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+            for i in t {
+                out.push(corners[i]);
+            }
+        }
+    }
+    out
+}
+
+impl NearfieldPass {
+    /// Compiles the shader and creates the layouts.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        ctx.scoped("creating the near-field pass", || {
+            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("nearfield.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+            });
+            let draw_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("near-field draw"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<DrawUniform>() as u64),
+                    },
+                    count: None,
+                }],
+            });
+            let mut entries = vec![wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<LumUniform>() as u64),
+                },
+                count: None,
+            }];
+            for b in 1..=5 {
+                entries.push(storage_entry(b, true));
+            }
+            entries.push(storage_entry(6, false));
+            for b in 0..MAX_POOL_PAGES as u32 {
+                entries.push(storage_entry(7 + b, true));
+            }
+            let lum_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("near-field luminaire"),
+                entries: &entries,
+            });
+            let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("near-field"),
+                bind_group_layouts: &[Some(&draw_layout), Some(&lum_layout)],
+                immediate_size: 0,
+            });
+            Ok(NearfieldPass {
+                module,
+                draw_layout,
+                lum_layout,
+                pipeline_layout,
+                pipelines: HashMap::new(),
+                uniforms: None,
+            })
+        })
+    }
+
+    /// Uploads a pack: camera records, selection tables, chunk map, and the tile pool within
+    /// `opts.budget_bytes` (the whole pack when it fits). `proxy` is a triangle list in the luminaire
+    /// frame (m).
+    pub fn upload(
+        &self,
+        ctx: &GpuContext,
+        pack: Arc<Pack>,
+        proxy: Option<Vec<[f32; 3]>>,
+        opts: &NearfieldOptions,
+    ) -> Result<NearfieldLuminaire, GpuError> {
+        let set = pack.rayset().clone();
+        let selection = Arc::new(Selection::build(&set, &opts.selection)?);
+        let chunks = ChunkLayout::new(&pack).map_err(|m| GpuError::invalid("pack", m))?;
+        let sphere = (set.sphere.centre_m, set.sphere.radius_m);
+        let mut content = match opts.content_radius_m {
+            Some(r) if r.is_finite() && r > 0.0 && r < sphere.1 => r,
+            Some(r) => {
+                return Err(GpuError::invalid(
+                    "content_radius_m",
+                    format!("{r} must be finite, > 0 and below the capture radius {} m", sphere.1),
+                ))
+            }
+            None => content_radius_m(&pack),
+        };
+        if let Some(p) = &proxy {
+            if p.is_empty() || p.len() % 3 != 0 || p.iter().any(|v| !v.iter().all(|x| x.is_finite())) {
+                return Err(GpuError::invalid(
+                    "proxy",
+                    "must be a non-empty list of finite triangles",
+                ));
+            }
+            for v in p {
+                let d = (glam::Vec3::from(*v).as_dvec3() - sphere.0).length();
+                if d >= sphere.1 {
+                    return Err(GpuError::invalid(
+                        "proxy",
+                        format!(
+                            "a vertex lies {d:.3} m from the capture centre, outside the capture sphere ({} m)",
+                            sphere.1
+                        ),
+                    ));
+                }
+                content = content.max(d * 1.001);
+            }
+        }
+        if opts.budget_bytes == 0 {
+            return Err(GpuError::invalid("budget_bytes", "must be > 0"));
+        }
+        ctx.scoped("uploading a near-field luminaire", || {
+            let storage = wgpu::BufferUsages::STORAGE;
+            // Camera records.
+            let layout = pack.layout();
+            let mut cams: Vec<[u32; 4]> = Vec::with_capacity(set.cameras.len() * 6);
+            for (i, (c, e)) in set.cameras.iter().zip(pack.images()).enumerate() {
+                let k = set.intrinsics_of(i);
+                let f = |v: f64| (v as f32).to_bits();
+                let p = c.position_m;
+                cams.push([f(p.x), f(p.y), f(p.z), e.width]);
+                cams.push([f(c.right.x), f(c.right.y), f(c.right.z), e.height]);
+                cams.push([f(c.down.x), f(c.down.y), f(c.down.z), f(k.focal_px.x)]);
+                cams.push([f(c.forward.x), f(c.forward.y), f(c.forward.z), f(k.focal_px.y)]);
+                cams.push([f(k.principal_px.x), f(k.principal_px.y), e.table_offset as u32, 0]);
+                cams.push([e.bbox.x0, e.bbox.y0, e.bbox.w, e.bbox.h]);
+            }
+            let g = selection.gpu_data();
+            let mut lists: Vec<u32> = Vec::new();
+            let base = |v: &[u32], lists: &mut Vec<u32>| {
+                let b = lists.len() as u32;
+                lists.extend_from_slice(v);
+                b
+            };
+            let tri_off = base(&g.tri_offsets, &mut lists);
+            let tri_items = base(&g.tri_items, &mut lists);
+            let n1_off = base(&g.near1_offsets, &mut lists);
+            let n1_items = base(&g.near1_items, &mut lists);
+            let n4_off = base(&g.near4_offsets, &mut lists);
+            let n4_items = base(&g.near4_items, &mut lists);
+            let max_binding = ctx.device.limits().max_storage_buffer_binding_size.min(MAX_PAGE_BYTES);
+            for (what, bytes) in [
+                ("camera records", cams.len() * 16),
+                ("selection triangles", g.triangles.len() * 16),
+                ("selection lists", lists.len() * 4),
+            ] {
+                if bytes as u64 > max_binding {
+                    return Err(GpuError::invalid(
+                        "scan",
+                        format!("its {what} need {bytes} bytes, above the {max_binding}-byte binding limit"),
+                    ));
+                }
+            }
+            let lum_uniform = LumUniform {
+                sphere: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, sphere.1 as f32],
+                content: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, content as f32],
+                grid: [g.n_phi, g.n_theta, layout.tile_size, layout.entry_bytes / 4],
+                lists_a: [tri_off, tri_items, n1_off, n1_items],
+                lists_b: [n4_off, n4_items, chunks.table_chunks, chunks.slots_per_chunk],
+                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, 0],
+                gap: [g.cos_max_gap, 0.0, 0.0, 0.0],
+            };
+            let chunks_per_page = (max_binding / CHUNK_BYTES).max(1) as u32;
+            let mut lum_uniform = lum_uniform;
+            lum_uniform.pool[1] = chunks_per_page;
+            let ubuf = buffer_init(
+                ctx,
+                "near-field luminaire",
+                bytemuck::bytes_of(&lum_uniform),
+                wgpu::BufferUsages::UNIFORM,
+            );
+            let cam_buf = buffer_init(ctx, "camera records", bytemuck::cast_slice(&cams), storage);
+            let tri_buf = buffer_init(ctx, "selection triangles", bytemuck::cast_slice(&g.triangles), storage);
+            let vert_buf = buffer_init(ctx, "selection vertices", bytemuck::cast_slice(&g.vertices), storage);
+            let list_buf = buffer_init(ctx, "selection lists", bytemuck::cast_slice(&lists), storage);
+            let map_len = chunks.chunk_count() as usize;
+            let chunk_map = buffer_init(
+                ctx,
+                "chunk map",
+                bytemuck::cast_slice(&vec![EMPTY; map_len.max(1)]),
+                storage,
+            );
+            let misses = buffer_init(
+                ctx,
+                "near-field misses",
+                &[0u8; 16],
+                storage | wgpu::BufferUsages::COPY_SRC,
+            );
+            let bounds_v = bounding_box(sphere.0, content);
+            let bounds = (
+                buffer_init(ctx, "content box", bytemuck::cast_slice(&bounds_v), wgpu::BufferUsages::VERTEX),
+                bounds_v.len() as u32,
+            );
+            let proxy_buf = proxy.as_ref().map(|p| {
+                (
+                    buffer_init(ctx, "proxy mesh", bytemuck::cast_slice(p), wgpu::BufferUsages::VERTEX),
+                    p.len() as u32,
+                )
+            });
+            let fixed: u64 = [&ubuf, &cam_buf, &tri_buf, &vert_buf, &list_buf, &chunk_map, &misses, &bounds.0]
+                .iter()
+                .map(|b| b.size())
+                .sum::<u64>()
+                + proxy_buf.as_ref().map_or(0, |p| p.0.size());
+            // One 256-byte stand-in for unused pool bindings.
+            let dummy_bytes = 256u64;
+            let all = chunks.all_needed();
+            let pool_budget = opts.budget_bytes.saturating_sub(fixed + dummy_bytes);
+            let capacity = (pool_budget / CHUNK_BYTES)
+                .min(all.len() as u64)
+                .min(MAX_POOL_PAGES as u64 * u64::from(chunks_per_page)) as u32;
+            if capacity == 0 && !all.is_empty() {
+                return Err(GpuError::invalid(
+                    "budget_bytes",
+                    format!(
+                        "{} bytes leave no room for tiles: camera records and selection tables take {fixed}; give at least {}",
+                        opts.budget_bytes,
+                        fixed + dummy_bytes + CHUNK_BYTES
+                    ),
+                ));
+            }
+            let mut pages = Vec::new();
+            let mut left = u64::from(capacity);
+            while left > 0 {
+                let n = left.min(u64::from(chunks_per_page));
+                pages.push(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("near-field tile pool page"),
+                    size: n * CHUNK_BYTES,
+                    usage: storage | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }));
+                left -= n;
+            }
+            let dummy = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("near-field unused pool binding"),
+                size: dummy_bytes,
+                usage: storage,
+                mapped_at_creation: false,
+            });
+            let gpu_bytes = fixed + dummy_bytes + pages.iter().map(|p| p.size()).sum::<u64>();
+            let mut entries = vec![
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: ubuf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: cam_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: tri_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: vert_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: list_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: chunk_map.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: misses.as_entire_binding(),
+                },
+            ];
+            for b in 0..MAX_POOL_PAGES {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: 7 + b as u32,
+                    resource: pages.get(b).unwrap_or(&dummy).as_entire_binding(),
+                });
+            }
+            let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("near-field luminaire"),
+                layout: &self.lum_layout,
+                entries: &entries,
+            });
+            let fully_resident = capacity as usize >= all.len();
+            let lum = NearfieldLuminaire {
+                pack: pack.clone(),
+                selection: selection.clone(),
+                sphere,
+                content_radius_m: content,
+                fully_resident: false,
+                residency: Mutex::new(Residency::new(chunks.chunk_count(), capacity)),
+                chunks,
+                chunk_map,
+                misses,
+                pages,
+                chunks_per_page,
+                bind,
+                bounds,
+                proxy: proxy_buf,
+                gpu_bytes,
+                budget_bytes: opts.budget_bytes,
+            };
+            if fully_resident {
+                // Upload everything once, in batches so staging memory stays bounded.
+                for batch in all.chunks(256) {
+                    lum.make_resident_chunks(ctx, batch)?;
+                    ctx.queue.submit([]);
+                }
+            }
+            Ok(NearfieldLuminaire { fully_resident, ..lum })
+        })
+    }
+
+    fn pipeline(&mut self, ctx: &GpuContext, key: PipelineKey) -> Result<wgpu::RenderPipeline, GpuError> {
+        if let Some(p) = self.pipelines.get(&key) {
+            return Ok(p.clone());
+        }
+        let p = ctx.scoped("creating a near-field pipeline", || {
+            let color_targets = [
+                Some(wgpu::ColorTargetState {
+                    format: key.color.wgpu(),
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+                key.depth_copy.then_some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::R32Float,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                }),
+            ];
+            let targets: &[Option<wgpu::ColorTargetState>] = if key.depth_copy {
+                &color_targets
+            } else {
+                &color_targets[..1]
+            };
+            Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("near-field"),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: 12,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    })],
+                },
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::TriangleList,
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(if key.reversed_z {
+                        wgpu::CompareFunction::Greater
+                    } else {
+                        wgpu::CompareFunction::Less
+                    }),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some(if key.depth_copy {
+                        "fs_main"
+                    } else {
+                        "fs_main_color_only"
+                    }),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            }))
+        })?;
+        self.pipelines.insert(key, p.clone());
+        Ok(p)
+    }
+
+    /// Prepares a frame: makes resident what each luminaire's instances can select (all instances of
+    /// a luminaire together) and writes the draw uniforms. The draws happen in [`NearfieldPass::draw`]
+    /// inside the frame's render pass.
+    pub fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        color: ColorFormat,
+        depth: DepthFormat,
+        camera: &HostCamera,
+        options: &RenderOptions,
+        instances: &[(Arc<NearfieldLuminaire>, Mat4, NearfieldSettings)],
+    ) -> Result<NearfieldFrame, GpuError> {
+        if instances.is_empty() {
+            return Ok(NearfieldFrame::default());
+        }
+        // Residency: the union over instances, per luminaire.
+        let mut per_lum: Vec<(Arc<NearfieldLuminaire>, Vec<u32>)> = Vec::new();
+        let mut slots: Vec<DrawUniform> = Vec::with_capacity(instances.len());
+        let mut draws = Vec::with_capacity(instances.len());
+        let clip_from_world = camera.clip_from_world();
+        let mode_out = if options.output == OutputMode::ToneMapped {
+            1.0
+        } else {
+            0.0
+        };
+        for (lum, model, settings) in instances {
+            let eye = camera.eye_in(*model);
+            if !lum.fully_resident {
+                let cams = lum.cameras_for_view(eye, settings.mode);
+                match per_lum.iter_mut().find(|(l, _)| Arc::ptr_eq(l, lum)) {
+                    Some((_, v)) => v.extend(cams),
+                    None => per_lum.push((lum.clone(), cams)),
+                }
+            }
+            let proxy = settings.proxy && lum.proxy.is_some();
+            let outside = if eye.w > 0.5 {
+                let e = eye.truncate().as_dvec3() - lum.sphere.0;
+                e.abs().max_element() > lum.content_radius_m
+            } else {
+                true
+            };
+            let mode = match settings.mode {
+                SelectionMode::Nearest => 0,
+                SelectionMode::Idw4 => 1,
+                SelectionMode::Continuous => 2,
+            };
+            draws.push((slots.len(), lum.clone(), proxy));
+            slots.push(DrawUniform {
+                clip_from_local: (clip_from_world * *model).to_cols_array_2d(),
+                eye_local: eye.to_array(),
+                params: [options.exposure, mode_out, 0.0, 0.0],
+                flags: [mode, u32::from(proxy), u32::from(outside), 0],
+            });
+        }
+        for (lum, mut cams) in per_lum {
+            cams.sort_unstable();
+            cams.dedup();
+            lum.make_resident(ctx, &cams)?;
+        }
+        let needed = (slots.len() as u64) * SLOT;
+        if self.uniforms.as_ref().is_none_or(|(_, cap, _)| *cap < needed) {
+            let cap = needed.next_power_of_two();
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("near-field draws"),
+                size: cap,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("near-field draws"),
+                layout: &self.draw_layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &buf,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(std::mem::size_of::<DrawUniform>() as u64),
+                    }),
+                }],
+            });
+            self.uniforms = Some((buf, cap, bind));
+        }
+        let mut bytes = vec![0u8; slots.len() * SLOT as usize];
+        for (k, s) in slots.iter().enumerate() {
+            let b = bytemuck::bytes_of(s);
+            bytes[k * SLOT as usize..k * SLOT as usize + b.len()].copy_from_slice(b);
+        }
+        if let Some((buf, _, _)) = &self.uniforms {
+            ctx.queue.write_buffer(buf, 0, &bytes);
+        }
+        let pipeline = self.pipeline(
+            ctx,
+            PipelineKey {
+                color,
+                depth_copy: depth == DepthFormat::R32Float,
+                reversed_z: camera.reversed_z,
+            },
+        )?;
+        Ok(NearfieldFrame {
+            draws,
+            pipeline: Some(pipeline),
+        })
+    }
+
+    /// Records a prepared frame's draws into the frame's render pass.
+    pub fn draw(&self, frame: &NearfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
+        let (Some(pipeline), Some((_, _, ubind))) = (&frame.pipeline, &self.uniforms) else {
+            return;
+        };
+        pass.set_pipeline(pipeline);
+        for (slot, lum, proxy) in &frame.draws {
+            pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
+            pass.set_bind_group(1, &lum.bind, &[]);
+            let (vb, n) = match (&lum.proxy, proxy) {
+                (Some(p), true) => (&p.0, p.1),
+                _ => (&lum.bounds.0, lum.bounds.1),
+            };
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.draw(0..n, 0..1);
+        }
+    }
+}
+
+impl NearfieldLuminaire {
+    fn make_resident_chunks(&self, ctx: &GpuContext, chunks: &[u32]) -> Result<(), GpuError> {
+        let mut r = self.residency.lock().unwrap_or_else(|p| p.into_inner());
+        // Keep what earlier batches uploaded: stamp them as needed too.
+        let mut needed: Vec<u32> = r
+            .map
+            .iter()
+            .enumerate()
+            .filter(|(_, g)| **g != EMPTY)
+            .map(|(c, _)| c as u32)
+            .collect();
+        needed.extend_from_slice(chunks);
+        needed.sort_unstable();
+        needed.dedup();
+        let uploads = r
+            .make_resident(&needed)
+            .map_err(|m| GpuError::invalid("budget_bytes", m))?;
+        for (g, c) in uploads {
+            let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
+            let page = (g / self.chunks_per_page) as usize;
+            let off = u64::from(g % self.chunks_per_page) * CHUNK_BYTES;
+            if !bytes.is_empty() {
+                ctx.queue.write_buffer(&self.pages[page], off, &bytes);
+            }
+        }
+        ctx.queue.write_buffer(&self.chunk_map, 0, bytemuck::cast_slice(&r.map));
+        Ok(())
+    }
+}
