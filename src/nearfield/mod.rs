@@ -10,6 +10,7 @@ pub mod manifest;
 pub mod pack;
 pub mod proxy;
 pub mod rayset;
+pub mod scanfile;
 pub mod select;
 pub mod synth;
 pub mod tm25;
