@@ -10,11 +10,29 @@
 #include <stddef.h>
 #include <stdbool.h>
 
-// The ABI version of this header; pass it in `lumi_context_desc.abi_version`.
-#define LUMI_ABI_VERSION 1
+// The ABI version of this header; pass it in `lumi_context_desc.abi_version`. History: 1 the first
+// release; 2 `lumi_luminaire_info` gained the near-field fields (`camera_count` … `budget_bytes`).
+#define LUMI_ABI_VERSION 2
 
 // Luminaire kind: far-field photometry (IES LM-63 or EULUMDAT).
 #define LUMI_LUMINAIRE_FARFIELD 0
+
+// Luminaire kind: a near-field scan (`.lvpack`, JSON scan manifest or TM-25 ray file) drawn with
+// its measured luminance. The far-field-only calls (`lumi_luminaire_sample`, `lumi_luminaire_lut`,
+// `lumi_instance_illuminance`) refuse it with `LUMI_STATUS_INVALID_ARGUMENT`.
+#define LUMI_LUMINAIRE_NEARFIELD 1
+
+// Near-field camera selection (values fixed): the single nearest capture camera per pixel (the
+// reference viewer's choice; features jump where the choice changes).
+#define LUMI_SELECTION_NEAREST 0
+
+// Near-field camera selection: the four nearest capture cameras blended by inverse angular
+// distance.
+#define LUMI_SELECTION_IDW4 1
+
+// Near-field camera selection: barycentric weights over the spherical Delaunay triangle of capture
+// cameras around the view direction (continuous; the default).
+#define LUMI_SELECTION_CONTINUOUS 2
 
 // Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 #define LUMI_OPENING_POINT 0
@@ -166,6 +184,33 @@ typedef struct lumi_device_caps {
   bool is_cpu;
 } lumi_device_caps;
 
+// How to load a luminaire (`lumi_luminaire_load_ex`). Start from `lumi_luminaire_desc_default()`.
+// The near-field fields apply to scans (`.lvpack`, JSON scan manifest, TM-25 ray file); for a
+// photometric file (IES, EULUMDAT) `budget_bytes` and `cache_dir` are ignored, and `proxy_path`
+// and `content_radius_m` must keep their defaults (NULL, 0).
+typedef struct lumi_luminaire_desc {
+  // Near-field: GPU bytes the luminaire may hold (camera records, selection tables and tile
+  // pool together), > 0; default 512 MiB. A scan that does not fit is streamed: each frame makes
+  // resident the tiles of the cameras the view can select (least recently used evicted); a view
+  // that needs more than the budget fails `lumi_render` with `LUMI_STATUS_INVALID_ARGUMENT`.
+  uint64_t budget_bytes;
+  // Near-field: optional proxy mesh, a glTF 2.0 file (`.glb`, or `.gltf` with its buffers) of the
+  // surfaces where the luminance appears, in the luminaire frame with glTF's axes (+Y up: glTF
+  // (X, Y, Z) is luminaire (X, −Z, Y)), metres, inside the capture sphere. NUL-terminated UTF-8,
+  // borrowed for the call; NULL for none. With a proxy, each fragment is reprojected through its
+  // surface point (parallax-correct) and depth comes from the proxy.
+  const char *proxy_path;
+  // Near-field: radius (m) of the ball around the capture centre holding everything the cameras
+  // saw; 0 derives it from the scan's tile bounding boxes. Otherwise finite, > 0 and below the
+  // capture radius.
+  double content_radius_m;
+  // Folder for the `.lvpack` a manifest or ray file is packed into (created if needed);
+  // NUL-terminated UTF-8, borrowed for the call; NULL for the default: `$LUMIVIEW_CACHE_DIR`,
+  // else `$XDG_CACHE_HOME/lumiview/packs`, else `$HOME/.cache/lumiview/packs`, else
+  // `<temp>/lumiview-cache/packs` (docs/ffi-conventions.md, "Near-field scans").
+  const char *cache_dir;
+} lumi_luminaire_desc;
+
 // Which host-lighting look-up table to produce (docs/lut-and-solid.md has the texel mapping).
 typedef struct lumi_lut_desc {
   // `LUMI_LUT_2D` (C × γ) or `LUMI_LUT_1D` (over cos γ).
@@ -183,9 +228,11 @@ typedef struct lumi_lut_desc {
 // Handle of a luminaire, owned by its context (0 is never a valid handle).
 typedef uint64_t lumi_luminaire;
 
-// Facts about a luminaire. Units: cd, lm, m.
+// Facts about a luminaire. Units: cd, lm, m. The far-field fields (`max_intensity_cd` …
+// `housing_size_m`) are 0 (`opening_shape` `LUMI_OPENING_POINT`) for a near-field luminaire, and
+// the near-field fields (`camera_count` … `budget_bytes`) are 0 / false for a far-field one.
 typedef struct lumi_luminaire_info {
-  // `LUMI_LUMINAIRE_FARFIELD`.
+  // `LUMI_LUMINAIRE_FARFIELD` or `LUMI_LUMINAIRE_NEARFIELD`.
   uint32_t kind;
   // Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame).
   double max_intensity_cd;
@@ -201,6 +248,21 @@ typedef struct lumi_luminaire_info {
   double opening_size_m[3];
   // Housing size (length, width, height) in metres; all 0 when the file gives none.
   double housing_size_m[3];
+  // Near-field: capture cameras (images) in the scan.
+  uint32_t camera_count;
+  // Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`).
+  bool has_proxy;
+  // Near-field: centre of the capture sphere in the luminaire frame, metres.
+  double capture_centre_m[3];
+  // Near-field: radius of the capture sphere (the cameras' distance from its centre), metres.
+  double capture_radius_m;
+  // Near-field: radius of the ball around the capture centre that holds everything the cameras
+  // saw (`lumi_luminaire_desc.content_radius_m`, or derived from the scan), metres.
+  double content_radius_m;
+  // Near-field: bytes of GPU memory the luminaire holds (never above `budget_bytes`).
+  uint64_t gpu_bytes;
+  // Near-field: the GPU budget it was loaded with (`lumi_luminaire_desc.budget_bytes`), bytes.
+  uint64_t budget_bytes;
 } lumi_luminaire_info;
 
 // Handle of an instance, owned by its context (0 is never a valid handle).
@@ -388,23 +450,65 @@ void lumi_context_destroy(struct lumi_context *ctx);
 // `ctx` is a live context; `out` points to writable storage (written only on success).
 lumi_status lumi_context_caps(const struct lumi_context *ctx, struct lumi_device_caps *out);
 
+// A default luminaire description: budget 512 MiB, no proxy, content radius derived from the scan,
+// default cache folder.
+struct lumi_luminaire_desc lumi_luminaire_desc_default(void);
+
 // A default look-up table description: 2D, 360 × 181 (1° steps: texel i at C = 360 i / W,
 // row j at γ = 180 j / (H − 1)), absolute cd, f32.
 struct lumi_lut_desc lumi_lut_desc_default(void);
 
-// Loads a luminaire from a file and uploads it. The format is detected: IES LM-63 (1986–2019) or
-// EULUMDAT (`.ldt`).
+// Loads a luminaire from a file and uploads it, with the defaults of `lumi_luminaire_desc_default()`
+// (`lumi_luminaire_load_ex(ctx, path, NULL, out)`). The format is detected from the file's first
+// bytes:
 //
-// - `path`: NUL-terminated UTF-8 path.
+// - `.lvpack` (magic `LVPACK`): a near-field scan, opened as it is;
+// - a JSON scan manifest (first non-blank character `{`) or an IES TM-25 ray file (magic `TM25`): a
+//   near-field scan, packed with default options into a cached `.lvpack` on first load (the cache:
+//   `lumi_luminaire_desc.cache_dir`, docs/ffi-conventions.md "Near-field scans"); later loads of
+//   the unchanged file only open the cached pack;
+// - anything else: far-field photometry, IES LM-63 (1986–2019) or EULUMDAT (`.ldt`).
+//
+// - `path`: NUL-terminated UTF-8 path, borrowed for the call.
 // - `out`: receives the handle (owned by the context; free with `lumi_luminaire_destroy` or by
 //   destroying the context); written only on success.
 //
-// Errors: `LUMI_STATUS_IO`, `LUMI_STATUS_PARSE` (the text names the file, line and field),
-// `LUMI_STATUS_NULL_POINTER`, `LUMI_STATUS_GPU`.
+// Errors: `LUMI_STATUS_IO`, `LUMI_STATUS_PARSE` (the text names the file, and the line, field,
+// section or image), `LUMI_STATUS_UNSUPPORTED` (a scan feature lumiview does not read),
+// `LUMI_STATUS_INVALID_ARGUMENT` (a scan whose tables exceed the device's binding limits),
+// `LUMI_STATUS_NULL_POINTER`, `LUMI_STATUS_GPU`, `LUMI_STATUS_OUT_OF_MEMORY`.
+//
+// Threading: one thread at a time per context. Packing a large manifest or ray file on first load
+// takes as long as `lumiview pack` (seconds to minutes) and holds the context's lock meanwhile.
 //
 // # Safety
 // `ctx` is a live context; `path` a NUL-terminated string; `out` writable.
-lumi_status lumi_luminaire_load(struct lumi_context *ctx, const char *path, lumi_luminaire *out);
+lumi_status lumi_luminaire_load(struct lumi_context *ctx,
+                                const char *path,
+                                lumi_luminaire *out);
+
+// Loads a luminaire like `lumi_luminaire_load` (same format detection, same errors) with a
+// description: the near-field GPU budget, proxy mesh, content radius and cache folder.
+//
+// - `path`: NUL-terminated UTF-8 path, borrowed for the call.
+// - `desc`: NULL for the defaults (`lumi_luminaire_desc_default()`); read during the call only.
+// - `out`: receives the handle (owned by the context); written only on success.
+//
+// Errors, besides those of `lumi_luminaire_load`: `LUMI_STATUS_INVALID_ARGUMENT` naming the field
+// (`desc.budget_bytes` 0, a negative or non-finite `desc.content_radius_m` or one not below the
+// capture radius, a proxy vertex outside the capture sphere, `desc.proxy_path` or
+// `desc.content_radius_m` set for a photometric file); `LUMI_STATUS_IO` / `LUMI_STATUS_PARSE`
+// naming the proxy file or the cache folder.
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context; `path` a NUL-terminated string; `desc` NULL or valid, with its paths
+// NULL or NUL-terminated; `out` writable.
+lumi_status lumi_luminaire_load_ex(struct lumi_context *ctx,
+                                   const char *path,
+                                   const struct lumi_luminaire_desc *desc,
+                                   lumi_luminaire *out);
 
 // Frees a luminaire and all its instances. Handle 0 is ignored; a stale handle is an error.
 //
@@ -412,7 +516,10 @@ lumi_status lumi_luminaire_load(struct lumi_context *ctx, const char *path, lumi
 // `ctx` is a live context.
 lumi_status lumi_luminaire_destroy(struct lumi_context *ctx, lumi_luminaire luminaire);
 
-// Describes a luminaire.
+// Describes a luminaire: its kind and, per kind, the far-field or near-field facts
+// (`lumi_luminaire_info` says which fields apply to which).
+//
+// Errors: `LUMI_STATUS_INVALID_ARGUMENT` (stale handle), `LUMI_STATUS_NULL_POINTER` (out).
 //
 // # Safety
 // `ctx` is a live context; `out` writable (written only on success).
@@ -423,6 +530,9 @@ lumi_status lumi_luminaire_get_info(const struct lumi_context *ctx,
 // Luminous intensity (cd) of a luminaire towards (C, γ) in degrees, and the luminance (cd/m²) of
 // its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 // be NULL; both are written only on success.
+//
+// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a near-field
+// luminaire (`LUMI_LUMINAIRE_NEARFIELD`: it has no far-field photometry).
 //
 // # Safety
 // `ctx` is a live context; non-NULL out-pointers writable.
@@ -437,7 +547,8 @@ lumi_status lumi_luminaire_sample(const struct lumi_context *ctx,
 // a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
 // gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
 // With `buffer` NULL only `required_bytes` is written (a size query). If `buffer_len` is too small:
-// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size.
+// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field luminaire
+// (`LUMI_LUMINAIRE_NEARFIELD`) has no table: `LUMI_STATUS_INVALID_ARGUMENT`.
 //
 // # Safety
 // `ctx` is a live context; `desc` valid; `buffer` NULL or `buffer_len` writable bytes;
@@ -475,7 +586,8 @@ lumi_status lumi_instance_set_transform(struct lumi_context *ctx,
 lumi_status lumi_instance_destroy(struct lumi_context *ctx, lumi_instance instance);
 
 // Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
-// (far field), the value a host's lighting shader should reproduce from the look-up tables.
+// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
+// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
 //
 // # Safety
 // `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
@@ -484,6 +596,28 @@ lumi_status lumi_instance_illuminance(const struct lumi_context *ctx,
                                       const float *point,
                                       const float *normal,
                                       double *lux);
+
+// Sets how an instance of a near-field luminaire draws: which capture cameras a pixel takes its
+// luminance from, and whether it reprojects through the luminaire's proxy mesh. New instances use
+// `LUMI_SELECTION_CONTINUOUS` with the proxy on.
+//
+// - `selection_mode`: `LUMI_SELECTION_NEAREST`, `LUMI_SELECTION_IDW4` or
+//   `LUMI_SELECTION_CONTINUOUS`.
+// - `use_proxy`: use the proxy mesh when the luminaire has one (`lumi_luminaire_info.has_proxy`);
+//   without one (or with false) the view ray is reprojected through the capture sphere and depth is
+//   a stand-in (docs/ffi-conventions.md, "Near-field scans").
+//
+// Takes effect from the next `lumi_render`. Errors: `LUMI_STATUS_INVALID_ARGUMENT` for an unknown
+// `selection_mode` (nothing changes), a stale instance, or an instance of a far-field luminaire.
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context.
+lumi_status lumi_instance_set_nearfield(struct lumi_context *ctx,
+                                        lumi_instance instance,
+                                        uint32_t selection_mode,
+                                        bool use_proxy);
 
 // A camera with identity matrices, GL depth range, no reversed Z, bottom-left origin (a GL host).
 struct lumi_camera lumi_camera_default(void);

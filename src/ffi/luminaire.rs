@@ -1,11 +1,18 @@
-//! Luminaires and instances: load from a file, query, host-lighting look-up tables, instances with
-//! model matrices, and the CPU illuminance a host's lighting should reproduce.
+//! Luminaires and instances: load from a file (photometry or a near-field scan), query,
+//! host-lighting look-up tables, instances with model matrices and near-field settings, and the CPU
+//! illuminance a host's lighting should reproduce.
 
 use std::ffi::c_char;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use super::context::{with_context, ContextInner};
 use super::{lumi_status, mat_arg, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
-use crate::gpu::{InstanceId, LuminaireId};
+use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings, DEFAULT_BUDGET_BYTES};
+use crate::gpu::renderer::Luminaire;
+use crate::gpu::{GpuError, InstanceId, LuminaireId};
+use crate::nearfield::scanfile;
+use crate::nearfield::select::SelectionMode;
 use crate::photometry::lut::{Lut, LutEncoding, LutTexels};
 use crate::photometry::{LoadOptions, OpeningShape, Photometry};
 
@@ -16,6 +23,40 @@ pub type lumi_instance = u64;
 
 /// Luminaire kind: far-field photometry (IES LM-63 or EULUMDAT).
 pub const LUMI_LUMINAIRE_FARFIELD: u32 = 0;
+/// Luminaire kind: a near-field scan (`.lvpack`, JSON scan manifest or TM-25 ray file) drawn with
+/// its measured luminance. The far-field-only calls (`lumi_luminaire_sample`, `lumi_luminaire_lut`,
+/// `lumi_instance_illuminance`) refuse it with `LUMI_STATUS_INVALID_ARGUMENT`.
+pub const LUMI_LUMINAIRE_NEARFIELD: u32 = 1;
+
+/// Near-field camera selection (values fixed): the single nearest capture camera per pixel (the
+/// reference viewer's choice; features jump where the choice changes).
+pub const LUMI_SELECTION_NEAREST: u32 = 0;
+/// Near-field camera selection: the four nearest capture cameras blended by inverse angular
+/// distance.
+pub const LUMI_SELECTION_IDW4: u32 = 1;
+/// Near-field camera selection: barycentric weights over the spherical Delaunay triangle of capture
+/// cameras around the view direction (continuous; the default).
+pub const LUMI_SELECTION_CONTINUOUS: u32 = 2;
+
+/// A selection mode from C (`LUMI_SELECTION_*`); an unknown value is an error.
+struct SelectionArg(SelectionMode);
+
+impl TryFrom<u32> for SelectionArg {
+    type Error = FfiError;
+    fn try_from(v: u32) -> Result<Self, FfiError> {
+        Ok(SelectionArg(match v {
+            LUMI_SELECTION_NEAREST => SelectionMode::Nearest,
+            LUMI_SELECTION_IDW4 => SelectionMode::Idw4,
+            LUMI_SELECTION_CONTINUOUS => SelectionMode::Continuous,
+            v => {
+                return Err(FfiError::invalid(
+                    "selection_mode",
+                    format!("unknown value {v} (LUMI_SELECTION_NEAREST 0, _IDW4 1, _CONTINUOUS 2)"),
+                ))
+            }
+        }))
+    }
+}
 
 /// Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 pub const LUMI_OPENING_POINT: u32 = 0;
@@ -42,11 +83,13 @@ pub const LUMI_OPENING_RECTANGLE_WITH_SIDES: u32 = 10;
 /// EULUMDAT disc with side heights.
 pub const LUMI_OPENING_DISC_WITH_SIDES: u32 = 11;
 
-/// Facts about a luminaire. Units: cd, lm, m.
+/// Facts about a luminaire. Units: cd, lm, m. The far-field fields (`max_intensity_cd` …
+/// `housing_size_m`) are 0 (`opening_shape` `LUMI_OPENING_POINT`) for a near-field luminaire, and
+/// the near-field fields (`camera_count` … `budget_bytes`) are 0 / false for a far-field one.
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct lumi_luminaire_info {
-    /// `LUMI_LUMINAIRE_FARFIELD`.
+    /// `LUMI_LUMINAIRE_FARFIELD` or `LUMI_LUMINAIRE_NEARFIELD`.
     pub kind: u32,
     /// Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame).
     pub max_intensity_cd: f64,
@@ -62,6 +105,62 @@ pub struct lumi_luminaire_info {
     pub opening_size_m: [f64; 3],
     /// Housing size (length, width, height) in metres; all 0 when the file gives none.
     pub housing_size_m: [f64; 3],
+    /// Near-field: capture cameras (images) in the scan.
+    pub camera_count: u32,
+    /// Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`).
+    pub has_proxy: bool,
+    /// Near-field: centre of the capture sphere in the luminaire frame, metres.
+    pub capture_centre_m: [f64; 3],
+    /// Near-field: radius of the capture sphere (the cameras' distance from its centre), metres.
+    pub capture_radius_m: f64,
+    /// Near-field: radius of the ball around the capture centre that holds everything the cameras
+    /// saw (`lumi_luminaire_desc.content_radius_m`, or derived from the scan), metres.
+    pub content_radius_m: f64,
+    /// Near-field: bytes of GPU memory the luminaire holds (never above `budget_bytes`).
+    pub gpu_bytes: u64,
+    /// Near-field: the GPU budget it was loaded with (`lumi_luminaire_desc.budget_bytes`), bytes.
+    pub budget_bytes: u64,
+}
+
+/// How to load a luminaire (`lumi_luminaire_load_ex`). Start from `lumi_luminaire_desc_default()`.
+/// The near-field fields apply to scans (`.lvpack`, JSON scan manifest, TM-25 ray file); for a
+/// photometric file (IES, EULUMDAT) `budget_bytes` and `cache_dir` are ignored, and `proxy_path`
+/// and `content_radius_m` must keep their defaults (NULL, 0).
+#[repr(C)]
+#[derive(Debug, Clone, Copy)]
+pub struct lumi_luminaire_desc {
+    /// Near-field: GPU bytes the luminaire may hold (camera records, selection tables and tile
+    /// pool together), > 0; default 512 MiB. A scan that does not fit is streamed: each frame makes
+    /// resident the tiles of the cameras the view can select (least recently used evicted); a view
+    /// that needs more than the budget fails `lumi_render` with `LUMI_STATUS_INVALID_ARGUMENT`.
+    pub budget_bytes: u64,
+    /// Near-field: optional proxy mesh, a glTF 2.0 file (`.glb`, or `.gltf` with its buffers) of the
+    /// surfaces where the luminance appears, in the luminaire frame with glTF's axes (+Y up: glTF
+    /// (X, Y, Z) is luminaire (X, −Z, Y)), metres, inside the capture sphere. NUL-terminated UTF-8,
+    /// borrowed for the call; NULL for none. With a proxy, each fragment is reprojected through its
+    /// surface point (parallax-correct) and depth comes from the proxy.
+    pub proxy_path: *const c_char,
+    /// Near-field: radius (m) of the ball around the capture centre holding everything the cameras
+    /// saw; 0 derives it from the scan's tile bounding boxes. Otherwise finite, > 0 and below the
+    /// capture radius.
+    pub content_radius_m: f64,
+    /// Folder for the `.lvpack` a manifest or ray file is packed into (created if needed);
+    /// NUL-terminated UTF-8, borrowed for the call; NULL for the default: `$LUMIVIEW_CACHE_DIR`,
+    /// else `$XDG_CACHE_HOME/lumiview/packs`, else `$HOME/.cache/lumiview/packs`, else
+    /// `<temp>/lumiview-cache/packs` (docs/ffi-conventions.md, "Near-field scans").
+    pub cache_dir: *const c_char,
+}
+
+/// A default luminaire description: budget 512 MiB, no proxy, content radius derived from the scan,
+/// default cache folder.
+#[no_mangle]
+pub extern "C" fn lumi_luminaire_desc_default() -> lumi_luminaire_desc {
+    lumi_luminaire_desc {
+        budget_bytes: DEFAULT_BUDGET_BYTES,
+        proxy_path: std::ptr::null(),
+        content_radius_m: 0.0,
+        cache_dir: std::ptr::null(),
+    }
 }
 
 /// Look-up table kinds (values fixed).
@@ -104,14 +203,144 @@ pub extern "C" fn lumi_lut_desc_default() -> lumi_lut_desc {
     }
 }
 
-pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Photometry, FfiError> {
-    let l = c
-        .renderer
+fn luminaire_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Luminaire, FfiError> {
+    c.renderer
         .luminaire(LuminaireId(lum))
-        .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {lum}")))?;
-    l.photometry()
-        .map(|p| p.as_ref())
-        .ok_or_else(|| FfiError::invalid("luminaire", "not a far-field luminaire"))
+        .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {lum}")))
+}
+
+pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Photometry, FfiError> {
+    luminaire_of(c, lum)?.photometry().map(|p| p.as_ref()).ok_or_else(|| {
+        FfiError::invalid(
+            "luminaire",
+            format!(
+                "luminaire {lum} is a near-field scan (LUMI_LUMINAIRE_NEARFIELD); this call needs far-field \
+                 photometry (IES or EULUMDAT)"
+            ),
+        )
+    })
+}
+
+/// The luminaire an instance draws, and the instance's handle checked.
+fn instance_luminaire(c: &ContextInner, instance: lumi_instance) -> Result<(lumi_luminaire, &Luminaire), FfiError> {
+    let (lum, _) = c.renderer.instance(InstanceId(instance)).map_err(|_| {
+        FfiError::invalid(
+            "instance",
+            format!("no instance with handle {instance} (destroyed, or its luminaire was)"),
+        )
+    })?;
+    Ok((lum.0, luminaire_of(c, lum.0)?))
+}
+
+/// The near-field description from C, checked.
+struct ScanDesc {
+    budget_bytes: u64,
+    proxy: Option<PathBuf>,
+    content_radius_m: Option<f64>,
+    cache_dir: Option<PathBuf>,
+}
+
+/// Reads a `lumi_luminaire_desc` (NULL: the defaults).
+///
+/// # Safety
+/// `desc` is NULL or valid; its strings NULL or NUL-terminated.
+unsafe fn scan_desc(desc: *const lumi_luminaire_desc) -> Result<ScanDesc, FfiError> {
+    // SAFETY: NULL or a valid descriptor per the caller's contract.
+    let d = unsafe { desc.as_ref() }
+        .copied()
+        .unwrap_or_else(|| lumi_luminaire_desc_default());
+    if d.budget_bytes == 0 {
+        return Err(FfiError::invalid("desc.budget_bytes", "must be > 0"));
+    }
+    if !(d.content_radius_m.is_finite() && d.content_radius_m >= 0.0) {
+        return Err(FfiError::invalid(
+            "desc.content_radius_m",
+            format!(
+                "{} must be finite and ≥ 0 (0: derived from the scan)",
+                d.content_radius_m
+            ),
+        ));
+    }
+    let opt_path = |p: *const c_char, name: &str| -> Result<Option<PathBuf>, FfiError> {
+        if p.is_null() {
+            Ok(None)
+        } else {
+            // SAFETY: non-NULL and NUL-terminated per the caller's contract.
+            unsafe { path_arg(p, name) }.map(Some)
+        }
+    };
+    Ok(ScanDesc {
+        budget_bytes: d.budget_bytes,
+        proxy: opt_path(d.proxy_path, "desc.proxy_path")?,
+        content_radius_m: (d.content_radius_m > 0.0).then_some(d.content_radius_m),
+        cache_dir: opt_path(d.cache_dir, "desc.cache_dir")?,
+    })
+}
+
+/// Puts the file's name in front of an error's text unless it is there already.
+fn in_file(path: &Path, e: FfiError) -> FfiError {
+    let p = path.display().to_string();
+    if e.message.contains(&p) {
+        e
+    } else {
+        FfiError::new(e.status, format!("{p}: {}", e.message))
+    }
+}
+
+/// A near-field upload error, with the descriptor's field names.
+fn upload_error(e: GpuError) -> FfiError {
+    match e {
+        GpuError::InvalidArgument { name, message } => {
+            let field = match name.as_str() {
+                "budget_bytes" => "desc.budget_bytes",
+                "content_radius_m" => "desc.content_radius_m",
+                "proxy" => "desc.proxy_path",
+                other => other,
+            };
+            FfiError::invalid(field, message)
+        }
+        other => other.into(),
+    }
+}
+
+/// Loads any luminaire file: a scan (detected by its first bytes) or photometry.
+fn load_any(c: &mut ContextInner, path: &Path, d: &ScanDesc) -> Result<LuminaireId, FfiError> {
+    let kind = scanfile::detect(path)?;
+    let Some(kind) = kind else {
+        if d.proxy.is_some() {
+            return Err(FfiError::invalid(
+                "desc.proxy_path",
+                format!(
+                    "{} is a photometric file, not a near-field scan: no proxy applies",
+                    path.display()
+                ),
+            ));
+        }
+        if d.content_radius_m.is_some() {
+            return Err(FfiError::invalid(
+                "desc.content_radius_m",
+                format!(
+                    "{} is a photometric file, not a near-field scan: must be 0",
+                    path.display()
+                ),
+            ));
+        }
+        return Ok(c.renderer.load_luminaire(path, &LoadOptions::default())?);
+    };
+    let (pack, _cached) =
+        scanfile::open_scan_of_kind(path, kind, d.cache_dir.as_deref()).map_err(|e| in_file(path, e.into()))?;
+    let proxy = match &d.proxy {
+        Some(p) => Some(crate::nearfield::proxy::load_gltf(p)?),
+        None => None,
+    };
+    let opts = NearfieldOptions {
+        budget_bytes: d.budget_bytes,
+        content_radius_m: d.content_radius_m,
+        ..NearfieldOptions::default()
+    };
+    c.renderer
+        .add_pack(Arc::new(pack), proxy, &opts)
+        .map_err(|e| in_file(path, upload_error(e)))
 }
 
 fn shape_code(s: OpeningShape) -> u32 {
@@ -131,15 +360,28 @@ fn shape_code(s: OpeningShape) -> u32 {
     }
 }
 
-/// Loads a luminaire from a file and uploads it. The format is detected: IES LM-63 (1986–2019) or
-/// EULUMDAT (`.ldt`).
+/// Loads a luminaire from a file and uploads it, with the defaults of `lumi_luminaire_desc_default()`
+/// (`lumi_luminaire_load_ex(ctx, path, NULL, out)`). The format is detected from the file's first
+/// bytes:
 ///
-/// - `path`: NUL-terminated UTF-8 path.
+/// - `.lvpack` (magic `LVPACK`): a near-field scan, opened as it is;
+/// - a JSON scan manifest (first non-blank character `{`) or an IES TM-25 ray file (magic `TM25`): a
+///   near-field scan, packed with default options into a cached `.lvpack` on first load (the cache:
+///   `lumi_luminaire_desc.cache_dir`, docs/ffi-conventions.md "Near-field scans"); later loads of
+///   the unchanged file only open the cached pack;
+/// - anything else: far-field photometry, IES LM-63 (1986–2019) or EULUMDAT (`.ldt`).
+///
+/// - `path`: NUL-terminated UTF-8 path, borrowed for the call.
 /// - `out`: receives the handle (owned by the context; free with `lumi_luminaire_destroy` or by
 ///   destroying the context); written only on success.
 ///
-/// Errors: `LUMI_STATUS_IO`, `LUMI_STATUS_PARSE` (the text names the file, line and field),
-/// `LUMI_STATUS_NULL_POINTER`, `LUMI_STATUS_GPU`.
+/// Errors: `LUMI_STATUS_IO`, `LUMI_STATUS_PARSE` (the text names the file, and the line, field,
+/// section or image), `LUMI_STATUS_UNSUPPORTED` (a scan feature lumiview does not read),
+/// `LUMI_STATUS_INVALID_ARGUMENT` (a scan whose tables exceed the device's binding limits),
+/// `LUMI_STATUS_NULL_POINTER`, `LUMI_STATUS_GPU`, `LUMI_STATUS_OUT_OF_MEMORY`.
+///
+/// Threading: one thread at a time per context. Packing a large manifest or ray file on first load
+/// takes as long as `lumiview pack` (seconds to minutes) and holds the context's lock meanwhile.
 ///
 /// # Safety
 /// `ctx` is a live context; `path` a NUL-terminated string; `out` writable.
@@ -156,7 +398,47 @@ pub unsafe extern "C" fn lumi_luminaire_load(
             if out.is_null() {
                 return Err(FfiError::null("out"));
             }
-            let id = c.renderer.load_luminaire(&path, &LoadOptions::default())?;
+            let id = load_any(c, &path, &scan_desc(std::ptr::null())?)?;
+            write_out(out, id.0);
+            Ok(())
+        })
+    }
+}
+
+/// Loads a luminaire like `lumi_luminaire_load` (same format detection, same errors) with a
+/// description: the near-field GPU budget, proxy mesh, content radius and cache folder.
+///
+/// - `path`: NUL-terminated UTF-8 path, borrowed for the call.
+/// - `desc`: NULL for the defaults (`lumi_luminaire_desc_default()`); read during the call only.
+/// - `out`: receives the handle (owned by the context); written only on success.
+///
+/// Errors, besides those of `lumi_luminaire_load`: `LUMI_STATUS_INVALID_ARGUMENT` naming the field
+/// (`desc.budget_bytes` 0, a negative or non-finite `desc.content_radius_m` or one not below the
+/// capture radius, a proxy vertex outside the capture sphere, `desc.proxy_path` or
+/// `desc.content_radius_m` set for a photometric file); `LUMI_STATUS_IO` / `LUMI_STATUS_PARSE`
+/// naming the proxy file or the cache folder.
+///
+/// Threading: one thread at a time per context.
+///
+/// # Safety
+/// `ctx` is a live context; `path` a NUL-terminated string; `desc` NULL or valid, with its paths
+/// NULL or NUL-terminated; `out` writable.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_luminaire_load_ex(
+    ctx: *mut crate::ffi::context::lumi_context,
+    path: *const c_char,
+    desc: *const lumi_luminaire_desc,
+    out: *mut lumi_luminaire,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_luminaire_load_ex", ctx, |c| {
+            let path = path_arg(path, "path")?;
+            if out.is_null() {
+                return Err(FfiError::null("out"));
+            }
+            let d = scan_desc(desc)?;
+            let id = load_any(c, &path, &d)?;
             write_out(out, id.0);
             Ok(())
         })
@@ -185,7 +467,10 @@ pub unsafe extern "C" fn lumi_luminaire_destroy(
     }
 }
 
-/// Describes a luminaire.
+/// Describes a luminaire: its kind and, per kind, the far-field or near-field facts
+/// (`lumi_luminaire_info` says which fields apply to which).
+///
+/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` (stale handle), `LUMI_STATUS_NULL_POINTER` (out).
 ///
 /// # Safety
 /// `ctx` is a live context; `out` writable (written only on success).
@@ -201,22 +486,49 @@ pub unsafe extern "C" fn lumi_luminaire_get_info(
             if out.is_null() {
                 return Err(FfiError::null("out"));
             }
-            let p = photometry_of(c, luminaire)?;
-            let (max_cd, mc, mg) = p.web.max_intensity();
-            let o = &p.opening;
-            write_out(
-                out,
-                lumi_luminaire_info {
-                    kind: LUMI_LUMINAIRE_FARFIELD,
-                    max_intensity_cd: max_cd,
-                    max_c_deg: mc,
-                    max_gamma_deg: mg,
-                    flux_lm: p.flux_lm(),
-                    opening_shape: shape_code(o.shape),
-                    opening_size_m: [o.length_m, o.width_m, o.height_m],
-                    housing_size_m: p.luminaire_size_m.unwrap_or([0.0; 3]),
-                },
-            );
+            let mut info = lumi_luminaire_info {
+                kind: LUMI_LUMINAIRE_FARFIELD,
+                max_intensity_cd: 0.0,
+                max_c_deg: 0.0,
+                max_gamma_deg: 0.0,
+                flux_lm: 0.0,
+                opening_shape: LUMI_OPENING_POINT,
+                opening_size_m: [0.0; 3],
+                housing_size_m: [0.0; 3],
+                camera_count: 0,
+                has_proxy: false,
+                capture_centre_m: [0.0; 3],
+                capture_radius_m: 0.0,
+                content_radius_m: 0.0,
+                gpu_bytes: 0,
+                budget_bytes: 0,
+            };
+            match luminaire_of(c, luminaire)? {
+                Luminaire::Farfield(f) => {
+                    let p = &f.photometry;
+                    let (max_cd, mc, mg) = p.web.max_intensity();
+                    let o = &p.opening;
+                    info.max_intensity_cd = max_cd;
+                    info.max_c_deg = mc;
+                    info.max_gamma_deg = mg;
+                    info.flux_lm = p.flux_lm();
+                    info.opening_shape = shape_code(o.shape);
+                    info.opening_size_m = [o.length_m, o.width_m, o.height_m];
+                    info.housing_size_m = p.luminaire_size_m.unwrap_or([0.0; 3]);
+                }
+                Luminaire::Nearfield(n) => {
+                    let r = n.residency();
+                    info.kind = LUMI_LUMINAIRE_NEARFIELD;
+                    info.camera_count = u32::try_from(n.pack.rayset().cameras.len()).unwrap_or(u32::MAX);
+                    info.has_proxy = n.has_proxy();
+                    info.capture_centre_m = n.sphere.0.to_array();
+                    info.capture_radius_m = n.sphere.1;
+                    info.content_radius_m = n.content_radius_m;
+                    info.gpu_bytes = r.gpu_bytes;
+                    info.budget_bytes = r.budget_bytes;
+                }
+            }
+            write_out(out, info);
             Ok(())
         })
     }
@@ -225,6 +537,9 @@ pub unsafe extern "C" fn lumi_luminaire_get_info(
 /// Luminous intensity (cd) of a luminaire towards (C, γ) in degrees, and the luminance (cd/m²) of
 /// its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 /// be NULL; both are written only on success.
+///
+/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a near-field
+/// luminaire (`LUMI_LUMINAIRE_NEARFIELD`: it has no far-field photometry).
 ///
 /// # Safety
 /// `ctx` is a live context; non-NULL out-pointers writable.
@@ -264,7 +579,8 @@ pub unsafe extern "C" fn lumi_luminaire_sample(
 /// a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
 /// gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
 /// With `buffer` NULL only `required_bytes` is written (a size query). If `buffer_len` is too small:
-/// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size.
+/// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field luminaire
+/// (`LUMI_LUMINAIRE_NEARFIELD`) has no table: `LUMI_STATUS_INVALID_ARGUMENT`.
 ///
 /// # Safety
 /// `ctx` is a live context; `desc` valid; `buffer` NULL or `buffer_len` writable bytes;
@@ -403,7 +719,8 @@ pub unsafe extern "C" fn lumi_instance_destroy(
 }
 
 /// Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
-/// (far field), the value a host's lighting shader should reproduce from the look-up tables.
+/// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
+/// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
 ///
 /// # Safety
 /// `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
@@ -427,11 +744,63 @@ pub unsafe extern "C" fn lumi_instance_illuminance(
             if lux.is_null() {
                 return Err(FfiError::null("lux"));
             }
+            if let (lum, Luminaire::Nearfield(_)) = instance_luminaire(c, instance)? {
+                return Err(FfiError::invalid(
+                    "instance",
+                    format!(
+                        "instance {instance} draws near-field luminaire {lum} (LUMI_LUMINAIRE_NEARFIELD), which has \
+                         no far-field photometry to compute illuminance from"
+                    ),
+                ));
+            }
             let p = glam::Vec3::new(*point, *point.add(1), *point.add(2));
             let n = glam::Vec3::new(*normal, *normal.add(1), *normal.add(2));
             let e = c.renderer.illuminance(InstanceId(instance), p, n)?;
             write_out(lux, e);
             Ok(())
+        })
+    }
+}
+
+/// Sets how an instance of a near-field luminaire draws: which capture cameras a pixel takes its
+/// luminance from, and whether it reprojects through the luminaire's proxy mesh. New instances use
+/// `LUMI_SELECTION_CONTINUOUS` with the proxy on.
+///
+/// - `selection_mode`: `LUMI_SELECTION_NEAREST`, `LUMI_SELECTION_IDW4` or
+///   `LUMI_SELECTION_CONTINUOUS`.
+/// - `use_proxy`: use the proxy mesh when the luminaire has one (`lumi_luminaire_info.has_proxy`);
+///   without one (or with false) the view ray is reprojected through the capture sphere and depth is
+///   a stand-in (docs/ffi-conventions.md, "Near-field scans").
+///
+/// Takes effect from the next `lumi_render`. Errors: `LUMI_STATUS_INVALID_ARGUMENT` for an unknown
+/// `selection_mode` (nothing changes), a stale instance, or an instance of a far-field luminaire.
+///
+/// Threading: one thread at a time per context.
+///
+/// # Safety
+/// `ctx` is a live context.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_instance_set_nearfield(
+    ctx: *mut crate::ffi::context::lumi_context,
+    instance: lumi_instance,
+    selection_mode: u32,
+    use_proxy: bool,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_instance_set_nearfield", ctx, |c| {
+            let SelectionArg(mode) = SelectionArg::try_from(selection_mode)?;
+            if let (lum, Luminaire::Farfield(_)) = instance_luminaire(c, instance)? {
+                return Err(FfiError::invalid(
+                    "instance",
+                    format!(
+                        "instance {instance} draws far-field luminaire {lum} (LUMI_LUMINAIRE_FARFIELD); near-field \
+                         settings apply to LUMI_LUMINAIRE_NEARFIELD luminaires"
+                    ),
+                ));
+            }
+            Ok(c.renderer
+                .set_nearfield_settings(InstanceId(instance), NearfieldSettings { mode, proxy: use_proxy })?)
         })
     }
 }

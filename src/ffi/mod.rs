@@ -58,8 +58,9 @@ pub const LUMI_STATUS_ABI_MISMATCH: lumi_status = 12;
 /// No usable Vulkan device (or none with the requested UUID).
 pub const LUMI_STATUS_NO_DEVICE: lumi_status = 13;
 
-/// The ABI version of this header; pass it in `lumi_context_desc.abi_version`.
-pub const LUMI_ABI_VERSION: u32 = 1;
+/// The ABI version of this header; pass it in `lumi_context_desc.abi_version`. History: 1 the first
+/// release; 2 `lumi_luminaire_info` gained the near-field fields (`camera_count` … `budget_bytes`).
+pub const LUMI_ABI_VERSION: u32 = 2;
 
 /// An error crossing the boundary: a status and its text.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -121,6 +122,12 @@ fn nearfield_status(e: &crate::nearfield::NearfieldError) -> lumi_status {
         N::InvalidArgument { .. } => LUMI_STATUS_INVALID_ARGUMENT,
         N::Unsupported { .. } => LUMI_STATUS_UNSUPPORTED,
         _ => LUMI_STATUS_PARSE,
+    }
+}
+
+impl From<crate::nearfield::NearfieldError> for FfiError {
+    fn from(e: crate::nearfield::NearfieldError) -> Self {
+        FfiError::new(nearfield_status(&e), e.to_string())
     }
 }
 
