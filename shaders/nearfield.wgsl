@@ -9,10 +9,11 @@
 //    at Q sees P along exactly the eye's line.
 // 3. Cameras around u are selected (nearest, idw4 or continuous barycentric weights over the spherical
 //    Delaunay triangulation; `src/nearfield/select/` builds the tables and documents them).
-// 4. Each selected camera is sampled (bilinear over pixel centres) where it sees the same point: the
-//    projection of P (proxy mode) or, without a proxy, the view direction v rotated into its frame
-//    (the "infinite-depth billboard").
-// 5. The weighted luminance (cd/m²) is written as linear luminance or tone mapped; depth is the proxy's,
+// 4. Each selected camera is sampled (bilinear over pixel centres; in proxy mode over the lit texels
+//    only, see sample_camera) where it sees the same point: the projection of P (proxy mode) or,
+//    without a proxy, the view direction v rotated into its frame (the "infinite-depth billboard").
+// 5. The blend (continuous: weighted geometric mean where every camera sees light, see shade())
+//    gives the luminance (cd/m²), written as linear luminance or tone mapped; depth is the proxy's,
 //    or the stand-in plane through the content centre facing the eye (bounding mode).
 //
 // Tiles are read from a pool of fixed-size chunks (residency: `src/gpu/nearfield.rs`): the pack's
@@ -162,17 +163,32 @@ fn texel(cam: Cam, col: i32, row: i32) -> f32 {
     return bitcast<f32>(pool_word(schunk, base + 1u + k));
 }
 
-// Bilinear luminance at pixel coordinates (x, y) (pixel centres at +0.5).
-fn sample_camera(cam: Cam, px: vec2<f32>) -> f32 {
+// Bilinear luminance at pixel coordinates (x, y) (pixel centres at +0.5). With `lit_only` (proxy
+// mode) the weights are renormalised over the texels that hold light: the proxy says where the surface
+// is and the images say its luminance, so a fragment near the surface's edge is not darkened by the
+// dark texels beyond the edge in the capture (plain bilinear would darken a band half a capture pixel
+// wide all around every silhouette, a bias in the intensity Σ L·ΔA). All four dark gives 0.
+fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
     let s = px - vec2<f32>(0.5, 0.5);
     let f0 = floor(s);
     let f = s - f0;
     let i = vec2<i32>(f0);
-    let a = texel(cam, i.x, i.y);
-    let b = texel(cam, i.x + 1, i.y);
-    let c = texel(cam, i.x, i.y + 1);
-    let d = texel(cam, i.x + 1, i.y + 1);
-    return mix(mix(a, b, f.x), mix(c, d, f.x), f.y);
+    let t = vec4<f32>(
+        texel(cam, i.x, i.y),
+        texel(cam, i.x + 1, i.y),
+        texel(cam, i.x, i.y + 1),
+        texel(cam, i.x + 1, i.y + 1)
+    );
+    let w = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
+    let l = dot(w, t);
+    if (!lit_only) {
+        return l;
+    }
+    let lit = dot(w, select(vec4<f32>(0.0), vec4<f32>(1.0), t > vec4<f32>(0.0)));
+    if (lit <= 0.0) {
+        return 0.0;
+    }
+    return l / lit;
 }
 
 // Luminance seen by camera `ci` at surface point p (proxy mode) or along direction v (bounding mode).
@@ -189,7 +205,7 @@ fn camera_luminance(ci: u32, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
         return 0.0;
     }
     let px = cam.principal + cam.focal * c.xy / c.z;
-    return sample_camera(cam, px);
+    return sample_camera(cam, px, proxy);
 }
 
 fn cell_of(u: vec3<f32>) -> u32 {
@@ -384,11 +400,28 @@ fn shade(in: VsOut, front: bool) -> Shaded {
     }
     // The point on the line closest to the content centre (bounding mode samples along v only).
     let pc = p - bc * v;
+    // Continuous mode blends log luminance (a weighted geometric mean) when every selected camera
+    // sees light there: luminance varies with direction multiplicatively (cosⁿ lobes, highlights), and
+    // interpolating its logarithm across the camera spacing keeps the relative error small where a
+    // linear blend of a peaked distribution is off by many percent; for a diffuse surface both are
+    // exact. Where a camera sees no light (a silhouette), or in nearest/idw4 (the reference's
+    // methods), the blend is linear.
     var l = 0.0;
+    var log_l = 0.0;
+    var all_lit = true;
     for (var i = 0u; i < 4u; i = i + 1u) {
         if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
-            l = l + sel.w[i] * camera_luminance(sel.cam[i], p, v, proxy);
+            let li = camera_luminance(sel.cam[i], p, v, proxy);
+            l = l + sel.w[i] * li;
+            if (li > 0.0) {
+                log_l = log_l + sel.w[i] * log(li);
+            } else {
+                all_lit = false;
+            }
         }
+    }
+    if (draw.flags.x == 2u && all_lit && l > 0.0) {
+        l = exp(log_l);
     }
     out.l = l;
     if (proxy) {
