@@ -154,10 +154,10 @@ pub fn relative_change(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
 
 /// Aggregate of a set of views (docs/quality-metrics.md): mean log RMSE, median of medians, largest
 /// p95, largest silhouette displacement, largest doubled-pattern score; `None` where any view lacks
-/// the metric.
+/// the metric. Views with a dark reference are left out.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SetMetrics {
-    /// Views in the set.
+    /// Views measured (those whose reference has lit pixels).
     pub views: usize,
     /// Mean of the views' log RMSE.
     pub log_rmse: Option<f64>,
@@ -175,6 +175,10 @@ pub struct SetMetrics {
 
 /// Aggregates view metrics.
 pub fn aggregate(views: &[ViewMetrics]) -> SetMetrics {
+    // A view whose reference is dark everywhere (e.g. cos¹⁰⁰ at γ 75°, 10⁻⁵⁴ of its peak) has nothing
+    // to measure: it is left out, and `views` counts the views measured.
+    let lit: Vec<ViewMetrics> = views.iter().filter(|m| m.lit > 0).copied().collect();
+    let views = &lit[..];
     let all = |f: &dyn Fn(&ViewMetrics) -> Option<f64>| -> Option<Vec<f64>> { views.iter().map(f).collect() };
     let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let max = |v: Vec<f64>| v.into_iter().reduce(f64::max);
@@ -232,8 +236,12 @@ mod tests {
         // A disc moved by 2 px: the symmetric difference is about 4r·2 px², the perimeter 2πr px.
         let expect = 4.0 * 30.0 * 2.0 / (2.0 * std::f64::consts::PI * 30.0);
         assert!((m.silhouette_px - expect).abs() < 0.35 * expect, "{}", m.silhouette_px);
-        // Interior pixels are 2 px from the reference edge, so a 2 px shift leaves them untouched
-        // on one side only partly: the doubled score sees the band.
+        // Interior pixels are at least 2 px inside the reference edge, so a 2 px shift leaves them
+        // lit: the interior metrics do not see it.
+        assert_eq!(m.doubled, Some(0.0));
+        // A 5 px shift uncovers a band of interior pixels: the doubled score sees it.
+        let r = disc(128, 128, 69.0, 30.0, 10.0);
+        let m = compare_view(&r, &t, 128, 128);
         assert!(m.doubled.unwrap() > 0.0);
     }
 
@@ -254,6 +262,7 @@ mod tests {
         assert!((relative_change(&a, &b, &[true; 3]) - 0.5 / 6.0).abs() < 1e-12);
         let v = [
             ViewMetrics {
+                lit: 100,
                 log_rmse: Some(0.01),
                 median_rel: Some(0.02),
                 p95_rel: Some(0.05),
@@ -261,6 +270,7 @@ mod tests {
                 ..Default::default()
             },
             ViewMetrics {
+                lit: 100,
                 log_rmse: Some(0.03),
                 median_rel: Some(0.01),
                 p95_rel: Some(0.07),
@@ -273,5 +283,14 @@ mod tests {
         assert_eq!(s.p95_rel, Some(0.07));
         assert_eq!(s.silhouette_px, 0.5);
         assert_eq!(s.median_rel, Some(0.01));
+        assert_eq!(s.views, 2);
+        // A view with a dark reference is left out; one lacking a metric makes the set n/a.
+        let dark = ViewMetrics::default();
+        assert_eq!(aggregate(&[v[0], v[1], dark]), s);
+        let no_interior = ViewMetrics {
+            lit: 3,
+            ..Default::default()
+        };
+        assert_eq!(aggregate(&[v[0], no_interior]).log_rmse, None);
     }
 }

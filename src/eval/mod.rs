@@ -21,7 +21,7 @@ use crate::nearfield::pack::{write_pack, Pack, PackOptions};
 use crate::nearfield::proxy::triangles_of;
 use crate::nearfield::rayset::look_at_basis;
 use crate::nearfield::select::SelectionMode;
-use crate::nearfield::synth::{self, render_pinhole, Luminaire, SynthOptions, SynthSource};
+use crate::nearfield::synth::{self, render_ortho, render_pinhole, Luminaire, OrthoView, SynthOptions, SynthSource};
 use crate::nearfield::{Camera, Hemisphere, Intrinsics, RayImageSet, Scan};
 
 pub use metrics::{aggregate, compare_view, SetMetrics, ViewMetrics};
@@ -101,8 +101,8 @@ pub struct EvalConfig {
     pub held_out_views: usize,
     /// Fibonacci directions of the flux quadrature over the sphere.
     pub flux_directions: usize,
-    /// Largest orthographic view side (px).
-    pub max_ortho_px: u32,
+    /// Side (px) of the orthographic views, which frame the bounding sphere (the pitch follows).
+    pub ortho_px: u32,
     /// Sweep: camera spacings covered, and the step (degrees).
     pub sweep_spacings: f64,
     /// Sweep step (degrees).
@@ -129,7 +129,7 @@ impl Default for EvalConfig {
             directions_deg: vec![(0.0, 10.0), (30.0, 100.0), (55.0, 200.0), (75.0, 300.0)],
             held_out_views: 12,
             flux_directions: 96,
-            max_ortho_px: 512,
+            ortho_px: 512,
             sweep_spacings: 3.0,
             sweep_step_deg: 0.05,
             max_sweep_px: 128,
@@ -169,12 +169,37 @@ pub struct ModeReport {
     pub intensity_median: f64,
     /// Largest relative intensity error.
     pub intensity_max: f64,
-    /// Relative flux error against the same quadrature of the closed-form intensity.
+    /// Relative flux error against the same quadrature of the ray-caster's orthographic intensities.
     pub flux_error: f64,
     /// Largest excess change per sweep step (render change − reference change), as a fraction.
     pub jump: f64,
     /// Index of the worst outside view (by log RMSE or, lacking it, silhouette).
     pub worst_view: Option<usize>,
+}
+
+/// The angular feature (degrees) of a synthetic luminaire's directional distribution that the camera
+/// layout must resolve: the half-power half-width of a cosⁿ lobe, acos(0.5^(1/n)); `None` for
+/// luminaires whose luminance does not depend on the direction (Lambertian) or has no lobe to sample
+/// (the reflector's highlights are judged without a threshold).
+pub fn angular_feature_deg(name: &str) -> Option<f64> {
+    let n: f64 = match name {
+        "cos10" => 10.0,
+        "cos100" => 100.0,
+        _ => return None,
+    };
+    Some(0.5f64.powf(1.0 / n).acos().to_degrees())
+}
+
+/// `rigo` cameras per hemisphere for a luminaire: `base`, or more where its angular feature asks for a
+/// spacing of at most 1/8 of it (spacing ≈ √(2π / N) rad for N cameras per hemisphere), capped at the
+/// full-size layout of 28,000.
+pub fn cameras_per_hemisphere(name: &str, base: usize) -> usize {
+    let Some(f) = angular_feature_deg(name) else {
+        return base;
+    };
+    let spacing = (f / 8.0).to_radians();
+    let need = (2.0 * std::f64::consts::PI / (spacing * spacing)).ceil() as usize;
+    base.max(need.min(28_000))
 }
 
 /// Results on one luminaire.
@@ -188,9 +213,12 @@ pub struct LuminaireReport {
     pub capture_px: u32,
     /// Capture pitch at the centre (mm).
     pub pitch_mm: f64,
+    /// View pitch at the luminaire's centre (mm): the capture pitch, or finer where the capture cap
+    /// leaves the smallest feature under 6 pixels.
+    pub view_pitch_mm: f64,
     /// Notes (relaxed rules, moved eyes).
     pub notes: Vec<String>,
-    /// The quadrature's own flux error against the closed form.
+    /// The reference quadrature's own flux error against the closed form (point sampling + directions).
     pub quadrature_flux_error: f64,
     /// Per mode.
     pub modes: Vec<ModeReport>,
@@ -301,7 +329,9 @@ struct Prepared {
     pack: Arc<Pack>,
     held_out: Vec<(Camera, Intrinsics)>,
     pitch_m: f64,
+    view_pitch_m: f64,
     capture_px: u32,
+    per_hemisphere: usize,
     rb: f64,
     notes: Vec<String>,
 }
@@ -322,10 +352,17 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
             cfg.max_capture_px
         ));
     }
+    let per_hemisphere = cameras_per_hemisphere(name, cfg.per_hemisphere);
+    if per_hemisphere != cfg.per_hemisphere {
+        notes.push(format!(
+            "{per_hemisphere} cameras per hemisphere (its {:.1}° lobe asks for ≤ 1/8 of it between cameras)",
+            angular_feature_deg(name).unwrap_or(0.0)
+        ));
+    }
     let opts = SynthOptions {
         luminaire: name.into(),
         layout: Layout::Rigo {
-            per_hemisphere: cfg.per_hemisphere,
+            per_hemisphere,
             overlap_deg: 2.0,
             jitter_deg: 0.05,
         },
@@ -335,6 +372,8 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
     };
     let (_, set) = synth::synth_set(&opts)?;
     let pitch_m = cfg.radius_m / set.intrinsics.focal_px.x;
+    // Views resolve the smallest feature with 6 pixels even where the capture cap does not.
+    let view_pitch_m = smallest_feature_m(name).map_or(pitch_m, |f| pitch_m.min(f / 6.0));
     // Hold out every tenth camera.
     let mut kept = Vec::new();
     let mut held_out = Vec::new();
@@ -353,7 +392,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
     std::fs::create_dir_all(&cfg.work_dir).map_err(|e| crate::nearfield::NearfieldError::io(&cfg.work_dir, e))?;
     let path = cfg
         .work_dir
-        .join(format!("{name}-rigo{}-{capture_px}px.lvpack", cfg.per_hemisphere));
+        .join(format!("{name}-rigo{per_hemisphere}-{capture_px}px.lvpack"));
     let reuse = Pack::open(&path)
         .ok()
         .filter(|p| p.image_count() == kept_set.cameras.len() && p.rayset().cameras == kept_set.cameras);
@@ -379,7 +418,9 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
         pack: Arc::new(pack),
         held_out,
         pitch_m,
+        view_pitch_m,
         capture_px,
+        per_hemisphere,
         rb,
         notes,
     })
@@ -406,6 +447,7 @@ pub fn evaluate(
         cameras: p.pack.image_count(),
         capture_px: p.capture_px,
         pitch_mm: p.pitch_m * 1e3,
+        view_pitch_mm: p.view_pitch_m * 1e3,
         notes,
         quadrature_flux_error: quad,
         modes,
@@ -431,7 +473,13 @@ fn evaluate_loaded(
     for &(g, c) in &cfg.directions_deg {
         let w = direction(g, c);
         for &d in &cfg.outside_m {
-            outside.push(framed_view(centre + w * d, centre, p.rb, p.pitch_m, cfg.max_view_px));
+            outside.push(framed_view(
+                centre + w * d,
+                centre,
+                p.rb,
+                p.view_pitch_m,
+                cfg.max_view_px,
+            ));
         }
         for &d in &cfg.inside_m {
             let min = p.rb + 0.05;
@@ -441,7 +489,13 @@ fn evaluate_loaded(
             } else {
                 d
             };
-            inside.push(framed_view(centre + w * d2, centre, p.rb, p.pitch_m, cfg.max_view_px));
+            inside.push(framed_view(
+                centre + w * d2,
+                centre,
+                p.rb,
+                p.view_pitch_m,
+                cfg.max_view_px,
+            ));
         }
     }
     notes.dedup();
@@ -474,18 +528,31 @@ fn evaluate_loaded(
         .collect();
     let fib = fibonacci(cfg.flux_directions);
     let i_max = grid.iter().map(|w| lum.intensity_cd(*w)).fold(0.0, f64::max);
-    let phi_q: f64 =
-        fib.iter().map(|w| lum.intensity_cd(*w)).sum::<f64>() * 4.0 * std::f64::consts::PI / fib.len() as f64;
-    let quad = (phi_q - lum.flux_lm()).abs() / lum.flux_lm();
+    // The intensity directions (closed form above 1 % of the maximum) and the flux directions (lower
+    // hemisphere), each with the ray-caster's Σ T·p² over the same orthographic pixels as the render.
+    progress(&format!("{}: ray-casting the orthographic references", lum.name()));
+    let grid: Vec<(DVec3, f64)> = grid
+        .into_iter()
+        .filter(|w| lum.intensity_cd(*w) > 1e-2 * i_max)
+        .map(|w| Ok((w, reference_ortho_intensity(lum, w, centre, p.rb, cfg.ortho_px)?)))
+        .collect::<Result<_, EvalError>>()?;
+    let fib: Vec<(DVec3, f64)> = fib
+        .into_iter()
+        .filter(|w| w.z < 0.0)
+        .map(|w| Ok((w, reference_ortho_intensity(lum, w, centre, p.rb, cfg.ortho_px)?)))
+        .collect::<Result<_, EvalError>>()?;
+    let quad_weight = 4.0 * std::f64::consts::PI / cfg.flux_directions as f64;
+    let phi_t: f64 = fib.iter().map(|(_, i)| i).sum::<f64>() * quad_weight;
+    let quad = (phi_t - lum.flux_lm()).abs() / lum.flux_lm();
     // Sweep.
-    let spacing = (4.0 * std::f64::consts::PI / (2.0 * cfg.per_hemisphere as f64))
+    let spacing = (4.0 * std::f64::consts::PI / (2.0 * p.per_hemisphere as f64))
         .sqrt()
         .to_degrees();
     let steps = ((cfg.sweep_spacings * spacing / cfg.sweep_step_deg).ceil() as usize).max(2);
     let sweep: Vec<View> = (0..=steps)
         .map(|k| {
             let w = direction(40.0, 10.0 + k as f64 * cfg.sweep_step_deg);
-            framed_view(centre + w * 2.0, centre, p.rb, p.pitch_m, cfg.max_sweep_px)
+            framed_view(centre + w * 2.0, centre, p.rb, p.view_pitch_m, cfg.max_sweep_px)
         })
         .collect();
     progress(&format!("{}: ray-casting {} sweep references", lum.name(), sweep.len()));
@@ -543,22 +610,16 @@ fn evaluate_loaded(
         }
         // Intensity.
         let mut errs = Vec::new();
-        for w in &grid {
-            let i_true = lum.intensity_cd(*w);
-            if i_true <= 1e-2 * i_max {
-                continue;
-            }
-            let i_hat = ortho_intensity(r, &mut targets, *w, centre, p.rb, p.pitch_m, cfg.max_ortho_px)?;
-            errs.push((i_hat - i_true).abs() / i_true);
+        for (w, i_t) in &grid {
+            let i_hat = ortho_intensity(r, &mut targets, *w, centre, p.rb, cfg.ortho_px)?;
+            errs.push((i_hat - i_t).abs() / i_t);
         }
         errs.sort_by(|a, b| a.total_cmp(b));
         let mut phi_hat = 0.0;
-        for w in &fib {
-            if w.z < 0.0 {
-                phi_hat += ortho_intensity(r, &mut targets, *w, centre, p.rb, p.pitch_m, cfg.max_ortho_px)?;
-            }
+        for (w, _) in &fib {
+            phi_hat += ortho_intensity(r, &mut targets, *w, centre, p.rb, cfg.ortho_px)?;
         }
-        phi_hat *= 4.0 * std::f64::consts::PI / fib.len() as f64;
+        phi_hat *= quad_weight;
         // Sweep.
         let mut prev: Option<Vec<f32>> = None;
         let mut jump: f64 = 0.0;
@@ -581,7 +642,7 @@ fn evaluate_loaded(
             held_out: aggregate(&m_held),
             intensity_median: errs.get(errs.len().saturating_sub(1) / 2).copied().unwrap_or(f64::NAN),
             intensity_max: errs.last().copied().unwrap_or(f64::NAN),
-            flux_error: (phi_hat - phi_q).abs() / phi_q,
+            flux_error: (phi_hat - phi_t).abs() / phi_t,
             jump,
             worst_view,
         });
@@ -589,17 +650,33 @@ fn evaluate_loaded(
     Ok((reports, quad, notes))
 }
 
-/// Î(ω) = Σ L · p² over an orthographic render along −ω framing a sphere of radius `rb`.
+/// The ray-caster's Σ T · p² over the pixels of [`ortho_intensity`]'s view (one ray through each pixel
+/// centre, as the GPU rasterises them).
+fn reference_ortho_intensity(lum: &dyn Luminaire, w: DVec3, centre: DVec3, rb: f64, px: u32) -> Result<f64, EvalError> {
+    let size = px.max(8);
+    let view = OrthoView {
+        direction: w,
+        centre_m: centre,
+        pixel_m: 2.0 * rb / f64::from(size - 2),
+        width: size,
+        height: size,
+    };
+    let pixel = view.pixel_m;
+    let img = render_ortho(lum, &view, 1)?;
+    Ok(img.data.iter().map(|v| f64::from(*v)).sum::<f64>() * pixel * pixel)
+}
+
+/// Î(ω) = Σ L · p² over an orthographic render along −ω framing a sphere of radius `rb` with `px`
+/// pixels a side (1 pixel of margin each side).
 fn ortho_intensity(
     r: &mut Renderer,
     targets: &mut Vec<RenderTarget>,
     w: DVec3,
     centre: DVec3,
     rb: f64,
-    pitch_m: f64,
-    max_px: u32,
+    px: u32,
 ) -> Result<f64, EvalError> {
-    let size = ((2.0 * rb / pitch_m).ceil() as u32 + 2).clamp(8, max_px);
+    let size = px.max(8);
     let pixel = 2.0 * rb / f64::from(size - 2);
     let cam = HostCamera::from_ortho(w, centre, pixel, size, size, rb + 0.05);
     let img = render_with(r, targets, &cam, size, size)?;
@@ -664,11 +741,12 @@ pub fn format_table(reports: &[LuminaireReport]) -> String {
             ));
         }
         s.push_str(&format!(
-            "{:<11} ({} cameras, {}² px, {:.3} mm pitch; quadrature flux error {:.3} %{})\n",
+            "{:<11} ({} cameras, {}² px, {:.3} mm pitch, views {:.3} mm; quadrature flux error {:.3} %{})\n",
             "",
             rep.cameras,
             rep.capture_px,
             rep.pitch_mm,
+            rep.view_pitch_mm,
             rep.quadrature_flux_error * 100.0,
             if rep.notes.is_empty() {
                 String::new()
