@@ -1,14 +1,21 @@
 //! `lumiview render`: a still of a luminaire's appearance, rendered on the GPU (Vulkan) exactly as a
-//! host would get it: a PNG of the tone-mapped image, or an OpenEXR of luminance in cd/m².
+//! host would get it: a PNG of the tone-mapped image, or an OpenEXR of luminance in cd/m². The input
+//! is far-field photometry (IES, EULUMDAT: the luminous opening) or a near-field scan (`.lvpack`, a
+//! scan manifest or a TM-25 ray file: the measured appearance, with a selection mode and an optional
+//! glTF proxy).
 
 use std::path::PathBuf;
 
 use clap::Args;
 use glam::{Mat4, Vec3, Vec4};
+use lumiview::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
 use lumiview::gpu::{
     Attachment, ColorFormat, ContextDesc, DepthFormat, DepthRange, HostCamera, Origin, OutputMode, Overlays,
     RenderOptions, RenderTarget, Renderer, TargetDesc,
 };
+use lumiview::nearfield::proxy::load_gltf;
+use lumiview::nearfield::scanfile::{detect, open_scan_of_kind};
+use lumiview::nearfield::select::SelectionMode;
 use lumiview::photometry::web::direction;
 
 use super::CliResult;
@@ -17,7 +24,8 @@ use crate::LoadArgs;
 /// Arguments of `lumiview render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// IES or EULUMDAT file.
+    /// IES or EULUMDAT file, or a near-field scan: .lvpack, scan manifest (.json) or TM-25 ray file
+    /// (the last two are packed once into the scan cache, see docs/formats.md).
     pub file: PathBuf,
     /// Output: .png (Reinhard tone-mapped, sRGB) or .exr (luminance in cd/m², RGBA32F).
     #[arg(short = 'o', long = "output")]
@@ -31,6 +39,19 @@ pub struct RenderArgs {
         value_name = "C,GAMMA,DIST"
     )]
     pub from: String,
+    /// Eye position in the luminaire frame, metres: EX,EY,EZ, or EX,EY,EZ,TX,TY,TZ to look at the point
+    /// T (default: the photometric centre, or a scan's capture centre). Overrides --from.
+    #[arg(long, allow_hyphen_values = true, value_name = "EX,EY,EZ[,TX,TY,TZ]")]
+    pub camera: Option<String>,
+    /// Near-field selection: nearest, idw4 or continuous.
+    #[arg(long, default_value = "continuous")]
+    pub mode: String,
+    /// Near-field proxy mesh (glTF 2.0, luminaire frame) for parallax-correct reprojection.
+    #[arg(long, value_name = "FILE.glb")]
+    pub proxy: Option<PathBuf>,
+    /// GPU budget of a near-field scan in MiB (tiles beyond it are streamed per view).
+    #[arg(long, default_value_t = 512)]
+    pub budget_mib: u64,
     /// Vertical field of view in degrees.
     #[arg(long, default_value_t = 30.0)]
     pub fov: f32,
@@ -65,6 +86,39 @@ fn parse_from(s: &str) -> Result<(f64, f64, f64), String> {
     }
 }
 
+fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--camera '{s}': expected EX,EY,EZ or EX,EY,EZ,TX,TY,TZ in metres"))?;
+    if v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("--camera '{s}': values must be finite"));
+    }
+    match v[..] {
+        [x, y, z] => Ok((Vec3::new(x, y, z), None)),
+        [x, y, z, a, b, c] => Ok((Vec3::new(x, y, z), Some(Vec3::new(a, b, c)))),
+        _ => Err(format!("--camera '{s}': expected 3 or 6 numbers")),
+    }
+}
+
+fn parse_mode(s: &str) -> Result<SelectionMode, String> {
+    match s {
+        "nearest" => Ok(SelectionMode::Nearest),
+        "idw4" => Ok(SelectionMode::Idw4),
+        "continuous" => Ok(SelectionMode::Continuous),
+        _ => Err(format!("--mode '{s}': expected nearest, idw4 or continuous")),
+    }
+}
+
+/// What was loaded: the luminance the PNG's default exposure is based on, and a description.
+struct Loaded {
+    /// Luminance (cd/m²) that maps to 0.5 by default; `None`: measure it from a first render.
+    l_ref: Option<f64>,
+    target: Vec3,
+    what: String,
+}
+
 /// Runs `lumiview render`.
 pub fn render(a: &RenderArgs) -> CliResult {
     let (c, g, dist) = parse_from(&a.from)?;
@@ -76,6 +130,8 @@ pub fn render(a: &RenderArgs) -> CliResult {
     if !(a.fov.is_finite() && a.fov > 0.1 && a.fov < 179.0) {
         return Err(format!("--fov {}: expected 0.1…179 degrees", a.fov).into());
     }
+    let camera = a.camera.as_deref().map(parse_camera).transpose()?;
+    let mode = parse_mode(&a.mode)?;
     let ext = a
         .output
         .extension()
@@ -86,16 +142,53 @@ pub fn render(a: &RenderArgs) -> CliResult {
         Some("exr") => true,
         _ => return Err(format!("{}: the output must end in .png or .exr", a.output.display()).into()),
     };
-    let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
-    if p.opening.is_point() {
-        eprintln!(
-            "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
-            a.file.display()
-        );
-    }
     let mut r = Renderer::new(&ContextDesc::default())?;
-    let lum = r.add_photometry(p.clone())?;
-    r.add_instance(lum, Mat4::IDENTITY)?;
+    let loaded = match detect(&a.file)? {
+        Some(kind) => {
+            let (pack, cached) = open_scan_of_kind(&a.file, kind, None)?;
+            let centre = pack.rayset().sphere.centre_m.as_vec3();
+            let cameras = pack.image_count();
+            let proxy = a.proxy.as_deref().map(load_gltf).transpose()?;
+            let has_proxy = proxy.is_some();
+            let opts = NearfieldOptions {
+                budget_bytes: a.budget_mib.saturating_mul(1 << 20),
+                ..NearfieldOptions::default()
+            };
+            let lum = r.add_pack(std::sync::Arc::new(pack), proxy, &opts)?;
+            let inst = r.add_instance(lum, Mat4::IDENTITY)?;
+            r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy: has_proxy })?;
+            Loaded {
+                l_ref: None,
+                target: centre,
+                what: format!(
+                    "near-field scan, {cameras} cameras, {} selection{}{}",
+                    a.mode,
+                    if has_proxy { " with proxy" } else { ", no proxy" },
+                    cached.map_or(String::new(), |p| format!(" (packed into {})", p.display()))
+                ),
+            }
+        }
+        None => {
+            if a.proxy.is_some() {
+                return Err("--proxy applies to near-field scans only".into());
+            }
+            let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
+            if p.opening.is_point() {
+                eprintln!(
+                    "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
+                    a.file.display()
+                );
+            }
+            let lum = r.add_photometry(p.clone())?;
+            r.add_instance(lum, Mat4::IDENTITY)?;
+            let l_here = p.luminance(c, g).unwrap_or(0.0);
+            Loaded {
+                l_ref: Some(l_here),
+                target: Vec3::ZERO,
+                what: format!("far-field, L = {l_here:.1} cd/m² at the centre"),
+            }
+        }
+    };
     let color = if exr {
         ColorFormat::Rgba32Float
     } else {
@@ -112,33 +205,57 @@ pub fn render(a: &RenderArgs) -> CliResult {
             semaphores: false,
         },
     )?;
-    let d = direction(c, g);
-    let eye = Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * dist as f32;
-    let up = if !(1.0..=179.0).contains(&g) { Vec3::X } else { Vec3::Z };
+    let (eye, target) = match camera {
+        Some((e, t)) => (e, t.unwrap_or(loaded.target)),
+        None => {
+            let d = direction(c, g);
+            (
+                loaded.target + Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * dist as f32,
+                loaded.target,
+            )
+        }
+    };
+    let fwd = target - eye;
+    if fwd.length() < 1e-6 {
+        return Err("--camera: the eye and the point it looks at coincide".into());
+    }
+    let up = if fwd.normalize().cross(Vec3::Z).length() < 0.02 {
+        Vec3::X
+    } else {
+        Vec3::Z
+    };
     let cam = HostCamera {
-        view: look_at(eye, up),
+        view: look_at(eye, target, up),
         projection: perspective(a.fov.to_radians(), w as f32 / h as f32, 0.01, 100.0),
         depth_range: DepthRange::ZeroToOne,
         reversed_z: false,
         origin: Origin::TopLeft,
     };
-    let l_here = p.luminance(c, g).unwrap_or(0.0);
-    let exposure = a
-        .exposure
-        .unwrap_or(if l_here > 0.0 { (1.0 / l_here) as f32 } else { 1e-3 });
-    let ro = RenderOptions {
+    let mut ro = RenderOptions {
         output: if exr {
             OutputMode::Luminance
         } else {
             OutputMode::ToneMapped
         },
-        exposure,
+        exposure: 1.0,
         overlays: Overlays {
             solid: a.solid,
             housing: a.housing,
         },
         solid_radius_m: 0.5,
     };
+    let l_ref = match (a.exposure, loaded.l_ref) {
+        (Some(_), _) => None,
+        (None, Some(l)) => Some(l),
+        // A scan: the 99th percentile of the luminance in view, from a first render in cd/m².
+        (None, None) if !exr => Some(percentile_luminance(&mut r, &cam, w, h, 0.99)?),
+        (None, None) => None,
+    };
+    let exposure = a.exposure.unwrap_or(match l_ref {
+        Some(l) if l > 0.0 => (1.0 / l) as f32,
+        _ => 1e-3,
+    });
+    ro.exposure = exposure;
     r.render(&mut t, &cam, &ro)?;
     let px = t.read(&r.ctx, Attachment::Color)?;
     if exr {
@@ -161,16 +278,57 @@ pub fn render(a: &RenderArgs) -> CliResult {
             .map_err(|e| format!("{}: {e}", a.output.display()))?;
     }
     println!(
-        "{}: {w}×{h} from C {c}° γ {g}° at {dist} m; L = {l_here:.1} cd/m² at the centre; exposure {exposure:e} m²/cd; {} ({})",
+        "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m; {}; exposure {exposure:e} m²/cd; {} ({})",
         a.output.display(),
+        eye.x,
+        eye.y,
+        eye.z,
+        target.x,
+        target.y,
+        target.z,
+        loaded.what,
         r.ctx.caps.adapter_name,
         if exr { "luminance, cd/m²" } else { "tone-mapped" }
     );
     Ok(())
 }
 
-fn look_at(eye: Vec3, up: Vec3) -> Mat4 {
-    let f = (-eye).normalize();
+/// The `q` quantile of the luminance (cd/m²) over the covered pixels of a render from `cam`.
+fn percentile_luminance(
+    r: &mut Renderer,
+    cam: &HostCamera,
+    w: u32,
+    h: u32,
+    q: f64,
+) -> Result<f64, Box<dyn std::error::Error>> {
+    let mut t = RenderTarget::new(
+        &r.ctx,
+        &TargetDesc {
+            width: w,
+            height: h,
+            color: ColorFormat::Rgba32Float,
+            depth: DepthFormat::None,
+            exportable: false,
+            semaphores: false,
+        },
+    )?;
+    r.render(&mut t, cam, &RenderOptions::default())?;
+    let px = t.read(&r.ctx, Attachment::Color)?;
+    let mut l: Vec<f32> = px
+        .chunks_exact(16)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .collect();
+    if l.is_empty() {
+        return Ok(0.0);
+    }
+    l.sort_by(f32::total_cmp);
+    let k = ((q * l.len() as f64) as usize).min(l.len() - 1);
+    Ok(f64::from(l[k]))
+}
+
+fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    let f = (target - eye).normalize();
     let s = f.cross(up).normalize();
     let u = s.cross(f);
     Mat4::from_cols(
