@@ -1,0 +1,346 @@
+//! Benchmark of the near-field pass, run by `scripts/bench-nearfield` (which prints the table).
+//!
+//! ```text
+//! bench_nearfield [--luminaire star-panel] [--cameras 2000] [--capture-px 256]
+//!                 [--size 640x360 ...] [--runs 11] [--work DIR]
+//! ```
+//!
+//! A synthetic scan (`rigo` layout, N cameras per hemisphere, square captures) is packed (cached in
+//! `--work`), uploaded, and drawn from an eye 1.6 m away that frames the luminaire so it covers most
+//! of the frame. For each output size, in one process on one device: a trivial pass (a full-screen
+//! triangle writing a constant into a target of the same size and format, submitted and waited for
+//! like a frame) and a near-field frame in each mode (nearest, idw4 and continuous without proxy,
+//! continuous with the proxy), each timed as the median of `--runs` (≥ 9) after one warm-up. Frame
+//! times include the submission, the image's queue-family barriers and the wait for the GPU: what a
+//! host pays per `lumi_render`. Prints one JSON object; ratios to the trivial pass are what to read
+//! on a software device, absolute times only on a real GPU.
+
+use std::error::Error;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{DVec2, DVec3, Mat4};
+use serde_json::json;
+
+use lumiview::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
+use lumiview::gpu::renderer::Luminaire;
+use lumiview::gpu::{
+    ColorFormat, ContextDesc, DepthFormat, HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc,
+};
+use lumiview::nearfield::layout::Layout;
+use lumiview::nearfield::pack::{csr_bytes_for, write_pack, Pack, PackOptions};
+use lumiview::nearfield::proxy::triangles_of;
+use lumiview::nearfield::rayset::look_at_basis;
+use lumiview::nearfield::select::SelectionMode;
+use lumiview::nearfield::synth::{self, SynthOptions};
+use lumiview::nearfield::{Camera, Hemisphere, Intrinsics};
+
+type Res<T> = std::result::Result<T, Box<dyn Error>>;
+
+struct Args {
+    luminaire: String,
+    cameras: usize,
+    capture_px: u32,
+    sizes: Vec<(u32, u32)>,
+    runs: usize,
+    work: PathBuf,
+}
+
+fn parse_args() -> Res<Args> {
+    let mut a = Args {
+        luminaire: "star-panel".into(),
+        cameras: 2000,
+        capture_px: 256,
+        sizes: Vec::new(),
+        runs: 11,
+        work: std::env::temp_dir().join("lumiview-bench-nearfield"),
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(k) = it.next() {
+        let mut v = || it.next().ok_or_else(|| format!("{k} needs a value"));
+        match k.as_str() {
+            "--luminaire" => a.luminaire = v()?,
+            "--cameras" => a.cameras = v()?.parse()?,
+            "--capture-px" => a.capture_px = v()?.parse()?,
+            "--runs" => a.runs = v()?.parse::<usize>()?.max(9),
+            "--work" => a.work = PathBuf::from(v()?),
+            "--size" => {
+                let s = v()?;
+                let (w, h) = s.split_once('x').ok_or_else(|| format!("--size {s}: expected WxH"))?;
+                a.sizes.push((w.parse()?, h.parse()?));
+            }
+            _ => return Err(format!("unknown argument {k}").into()),
+        }
+    }
+    if a.sizes.is_empty() {
+        a.sizes.push((640, 360));
+    }
+    Ok(a)
+}
+
+/// A full-screen triangle that writes a constant: the floor every per-pixel pass pays.
+struct Trivial {
+    pipeline: wgpu::RenderPipeline,
+}
+
+const TRIVIAL_WGSL: &str = r#"
+@vertex
+fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(p * 2.0 - 1.0, 0.5, 1.0);
+}
+@fragment
+fn fs() -> @location(0) vec4<f32> {
+    return vec4<f32>(1000.0, 1000.0, 1000.0, 1.0);
+}
+"#;
+
+impl Trivial {
+    fn new(device: &wgpu::Device) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trivial"),
+            source: wgpu::ShaderSource::Wgsl(TRIVIAL_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("trivial"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: None,
+            multisample: wgpu::MultisampleState::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: wgpu::TextureFormat::Rgba32Float,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Trivial { pipeline }
+    }
+
+    fn frame(&self, r: &Renderer, view: &wgpu::TextureView) -> Res<()> {
+        let mut enc = r.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("trivial"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.draw(0..3, 0..1);
+        }
+        r.ctx.queue.submit([enc.finish()]);
+        r.ctx.wait_idle()?;
+        Ok(())
+    }
+}
+
+fn median_ms(mut f: impl FnMut() -> Res<()>, runs: usize) -> Res<(f64, Vec<f64>)> {
+    f()?; // warm-up: pipelines, residency, caches
+    let mut t = Vec::with_capacity(runs);
+    for _ in 0..runs {
+        let s = Instant::now();
+        f()?;
+        t.push(s.elapsed().as_secs_f64() * 1e3);
+    }
+    let mut sorted = t.clone();
+    sorted.sort_by(f64::total_cmp);
+    Ok((sorted[sorted.len() / 2], t))
+}
+
+fn run(a: &Args) -> Res<serde_json::Value> {
+    std::fs::create_dir_all(&a.work)?;
+    let path = a
+        .work
+        .join(format!("{}-rigo{}-{}px.lvpack", a.luminaire, a.cameras, a.capture_px));
+    let opts = SynthOptions {
+        luminaire: a.luminaire.clone(),
+        layout: Layout::Rigo {
+            per_hemisphere: a.cameras,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        },
+        size: (a.capture_px, a.capture_px),
+        ..SynthOptions::default()
+    };
+    if Pack::open(&path).is_err() {
+        eprintln!("packing {} ...", path.display());
+        let scan = synth::synth_scan(&opts)?;
+        write_pack(&scan, &path, &PackOptions::default(), &|_, _| {})?;
+    }
+    let pack = Arc::new(Pack::open(&path)?);
+    let lum = synth::luminaire(&a.luminaire)?;
+    // CSR of the same images (u32 column + f32 value per nonzero pixel, row pointers).
+    let mut csr = 0u64;
+    let mut nonzero = 0u64;
+    for i in 0..pack.image_count() {
+        let img = pack.decode_image(i)?;
+        let nz = img.data.iter().filter(|v| **v != 0.0).count() as u64;
+        nonzero += nz;
+        csr += csr_bytes_for(img.height, nz);
+    }
+    let mut r = Renderer::new(&ContextDesc::default())?;
+    let id = r.add_pack(
+        pack.clone(),
+        Some(triangles_of(&lum.proxy())),
+        &NearfieldOptions::default(),
+    )?;
+    let mut inst = r.add_instance(id, Mat4::IDENTITY)?;
+    let resident = match r.luminaire(id)? {
+        Luminaire::Nearfield(n) => n.residency(),
+        _ => return Err("not a near-field luminaire".into()),
+    };
+    let trivial = Trivial::new(&r.ctx.device);
+    let b = lum.bounds();
+    let centre = b.centre();
+    let rb = b.radius();
+    let mut sizes = Vec::new();
+    for &(w, h) in &a.sizes {
+        // Eye 1.6 m away at γ = 35°, the bounding sphere framed by the frame's height.
+        let g = 35f64.to_radians();
+        let eye = centre + DVec3::new(g.sin() * 0.6, g.sin() * 0.8, -g.cos()) * 1.6;
+        let (right, down, forward) = look_at_basis(centre - eye);
+        let d = (centre - eye).length();
+        let f = 0.5 * f64::from(h) / (rb / d).asin().tan();
+        let cam = Camera {
+            position_m: eye,
+            right,
+            down,
+            forward,
+            intrinsics: None,
+            hemisphere: Hemisphere::Lower,
+            meta: Default::default(),
+            label: "bench".into(),
+        };
+        let k = Intrinsics {
+            width: w,
+            height: h,
+            principal_px: DVec2::new(0.5 * f64::from(w), 0.5 * f64::from(h)),
+            focal_px: DVec2::splat(f),
+        };
+        let hc = HostCamera::from_pinhole(&cam, &k, 0.05, 10.0);
+        let mut target = RenderTarget::new(
+            &r.ctx,
+            &TargetDesc {
+                width: w,
+                height: h,
+                color: ColorFormat::Rgba32Float,
+                depth: DepthFormat::None,
+                exportable: false,
+                semaphores: false,
+            },
+        )?;
+        let plain = r.ctx.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("trivial target"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            view_formats: &[],
+        });
+        let plain_view = plain.create_view(&Default::default());
+        // Interleave: trivial, each mode, trivial again — drift on a shared machine shows up as two
+        // different trivial medians.
+        let (t0, t0_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
+        let mut modes = Vec::new();
+        for (label, mode, proxy) in [
+            ("nearest", SelectionMode::Nearest, false),
+            ("idw4", SelectionMode::Idw4, false),
+            ("continuous", SelectionMode::Continuous, false),
+            ("continuous+proxy", SelectionMode::Continuous, true),
+        ] {
+            r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy })?;
+            let (m, runs) = median_ms(
+                || {
+                    r.render(&mut target, &hc, &RenderOptions::default())?;
+                    Ok(())
+                },
+                a.runs,
+            )?;
+            modes.push(json!({"mode": label, "median_ms": m, "runs_ms": runs}));
+        }
+        // The frame's fixed cost: the same render call with the luminaire's instance removed.
+        r.remove_instance(inst)?;
+        let (empty, _) = median_ms(
+            || {
+                r.render(&mut target, &hc, &RenderOptions::default())?;
+                Ok(())
+            },
+            a.runs,
+        )?;
+        inst = r.add_instance(id, Mat4::IDENTITY)?;
+        let (t1, t1_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
+        // Coverage: how much of the frame the luminaire's proxy fills.
+        r.set_nearfield_settings(inst, NearfieldSettings::default())?;
+        r.render(&mut target, &hc, &RenderOptions::default())?;
+        let px = target.read(&r.ctx, lumiview::gpu::Attachment::Color)?;
+        let covered = px
+            .chunks_exact(16)
+            .filter(|c| f32::from_le_bytes([c[12], c[13], c[14], c[15]]) > 0.0)
+            .count();
+        sizes.push(json!({
+            "width": w, "height": h,
+            "trivial_ms": [t0, t1], "trivial_runs_ms": [t0_runs, t1_runs],
+            "modes": modes,
+            "empty_frame_ms": empty,
+            "covered_fraction": covered as f64 / f64::from(w * h),
+        }));
+    }
+    Ok(json!({
+        "device": r.ctx.caps.adapter_name,
+        "is_cpu": r.ctx.caps.is_cpu,
+        "luminaire": a.luminaire,
+        "cameras": pack.image_count(),
+        "capture_px": a.capture_px,
+        "runs": a.runs,
+        "pack_file_bytes": pack.file_len(),
+        "gpu_resident_bytes": resident.gpu_bytes,
+        "csr_bytes": csr,
+        "nonzero_pixels": nonzero,
+        "sizes": sizes,
+    }))
+}
+
+fn main() -> ExitCode {
+    let out = parse_args().and_then(|a| run(&a));
+    match out {
+        Ok(v) => {
+            println!("{v}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("bench_nearfield: error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
