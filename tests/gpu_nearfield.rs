@@ -258,3 +258,102 @@ fn streaming_under_a_quarter_budget_renders_the_resident_image() {
     assert!(rep.evictions > 0, "the views should have forced evictions: {rep:?}");
     gpu_common::assert_no_validation_messages();
 }
+
+/// Log tone (4 decades below `lmax`) to 8-bit grey.
+fn grey(v: f32, lmax: f32) -> u8 {
+    if v <= 0.0 {
+        return 0;
+    }
+    (((v / lmax).log10() + 4.0) / 4.0 * 255.0).clamp(0.0, 255.0) as u8
+}
+
+#[test]
+fn two_planes_from_inside_the_sphere_show_no_doubled_pattern_with_the_proxy() {
+    use lumiview::eval::{compare_view, framed_view, render_view};
+    let _g = gpu_common::GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = gpu_common::renderer() else {
+        return;
+    };
+    // The tiles' 10 mm gaps ask for ≤ 1.67 mm capture pixels: 224 px frame the luminaire at 1.6 mm.
+    let (pack, lum) = packed("two-planes", 800, 224);
+    let pitch = pack.rayset().sphere.radius_m / pack.rayset().intrinsics.focal_px.x;
+    let id = r
+        .add_pack(pack, Some(triangles_of(&lum.proxy())), &NearfieldOptions::default())
+        .unwrap();
+    let inst = r.add_instance(id, Mat4::IDENTITY).unwrap();
+    let b = lum.bounds();
+    let centre = b.centre();
+    let rb = centre.length() + b.radius();
+    // An eye 0.45 m from the centre, inside the 1.117 m capture sphere, below and to the side.
+    let (g, c) = (30f64.to_radians(), 100f64.to_radians());
+    let eye = centre + DVec3::new(g.sin() * c.cos(), g.sin() * c.sin(), -g.cos()) * 0.45;
+    let view = framed_view(eye, centre, rb, pitch, 96);
+    let (w, h) = (view.intrinsics.width as usize, view.intrinsics.height as usize);
+    let truth = render_pinhole(lum.as_ref(), &view.camera, &view.intrinsics, 1)
+        .unwrap()
+        .data;
+    let mut targets = Vec::new();
+    let mut images = Vec::new();
+    for (mode, proxy) in [(SelectionMode::Nearest, false), (SelectionMode::Continuous, true)] {
+        r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy })
+            .unwrap();
+        let img = render_view(&mut r, &mut targets, &view).unwrap();
+        let m = compare_view(&img, &truth, w, h);
+        eprintln!("{mode:?} proxy={proxy}: {m:?}");
+        let doubled = m.doubled.expect("interior pixels");
+        if proxy {
+            assert!(doubled < 0.005, "doubled-pattern score with the proxy: {doubled}");
+            assert!(m.log_rmse.unwrap() < 0.01, "{m:?}");
+        } else {
+            // The reference viewer's way (nearest camera, infinite depth) shows the pattern twice.
+            assert!(doubled > 0.05, "nearest without proxy: {doubled}");
+        }
+        images.push(img);
+    }
+    images.push(truth);
+    // Golden: nearest | continuous + proxy | truth, 4-decade log scale.
+    let lmax = images[2].iter().cloned().fold(0.0f32, f32::max);
+    let mut rgba = vec![0u8; 3 * w * h * 4];
+    for (k, img) in images.iter().enumerate() {
+        for y in 0..h {
+            for x in 0..w {
+                let v = grey(img[y * w + x], lmax);
+                let o = ((y * 3 * w) + k * w + x) * 4;
+                rgba[o..o + 4].copy_from_slice(&[v, v, v, 255]);
+            }
+        }
+    }
+    let actual =
+        tiny_skia::Pixmap::from_vec(rgba, tiny_skia::IntSize::from_wh(3 * w as u32, h as u32).unwrap()).unwrap();
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let golden_path = root.join("tests/golden/nearfield_two_planes_inside.png");
+    if std::env::var("LUMIVIEW_BLESS").is_ok_and(|v| v == "1") {
+        actual.save_png(&golden_path).unwrap();
+        eprintln!("blessed {}", golden_path.display());
+        return;
+    }
+    let failures = root.join("target/golden-failures");
+    std::fs::create_dir_all(&failures).unwrap();
+    let golden = tiny_skia::Pixmap::load_png(&golden_path).unwrap_or_else(|e| {
+        let p = failures.join("nearfield_two_planes_inside-actual.png");
+        actual.save_png(&p).unwrap();
+        panic!("{}: {e}; the render is at {}", golden_path.display(), p.display())
+    });
+    assert_eq!((golden.width(), golden.height()), (actual.width(), actual.height()));
+    let outliers = actual
+        .data()
+        .chunks_exact(4)
+        .zip(golden.data().chunks_exact(4))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 3))
+        .count();
+    if outliers * 200 > w * h * 3 {
+        let p = failures.join("nearfield_two_planes_inside-actual.png");
+        actual.save_png(&p).unwrap();
+        panic!(
+            "{outliers} pixels differ from {} by more than 3/255; see {}",
+            golden_path.display(),
+            p.display()
+        );
+    }
+    gpu_common::assert_no_validation_messages();
+}

@@ -1,0 +1,107 @@
+//! The near-field quality contract (docs/quality-metrics.md) held by tests: the harness of
+//! `lumiview eval` on synthetic luminaires, at a smaller configuration than the CLI's default so that
+//! CI stays fast (fewer cameras and views, smaller captures and orthographic views, a shorter sweep),
+//! on lavapipe. Continuous selection with the proxy must meet the thresholds and beat the
+//! reference viewer's nearest-camera mode on every metric.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod gpu_common;
+
+use lumiview::eval::{evaluate, format_table, EvalConfig, EvalMode, LuminaireReport, ModeReport};
+
+fn config(tag: &str, max_capture_px: u32) -> EvalConfig {
+    EvalConfig {
+        per_hemisphere: 800,
+        max_capture_px,
+        max_view_px: 96,
+        outside_m: vec![1.5, 3.0],
+        inside_m: vec![0.4, 0.9],
+        held_out_views: 6,
+        flux_directions: 48,
+        ortho_px: 256,
+        sweep_spacings: 1.5,
+        max_sweep_px: 64,
+        modes: vec![EvalMode::Nearest, EvalMode::ContinuousProxy],
+        work_dir: std::env::temp_dir().join(format!("lumiview-quality-{tag}-{}", std::process::id())),
+        images_dir: None,
+        ..EvalConfig::default()
+    }
+}
+
+fn mode<'a>(rep: &'a LuminaireReport, label: &str) -> &'a ModeReport {
+    rep.modes.iter().find(|m| m.mode == label).unwrap()
+}
+
+/// The thresholds for continuous + proxy, and "better than nearest on every metric" (ties at
+/// the storage quantisation floor, 2⁻¹¹ relative, count as not worse).
+fn check(rep: &LuminaireReport) {
+    let c = mode(rep, "continuous+proxy");
+    let n = mode(rep, "nearest");
+    let name = &rep.name;
+    for (set, what) in [
+        (&c.outside, "outside"),
+        (&c.inside, "inside"),
+        (&c.held_out, "held-out"),
+    ] {
+        let l = set.log_rmse.unwrap_or_else(|| panic!("{name} {what}: log RMSE n/a"));
+        assert!(l < 0.01, "{name} {what}: log RMSE {l}");
+        let m = set.median_rel.unwrap_or_else(|| panic!("{name} {what}: median n/a"));
+        assert!(m < 0.02, "{name} {what}: median {m}");
+    }
+    assert!(c.flux_error < 0.01, "{name}: flux error {}", c.flux_error);
+    assert!(c.jump < 0.02, "{name}: jump {}", c.jump);
+    let floor = 2f64.powi(-11);
+    let not_worse = |a: Option<f64>, b: Option<f64>, what: &str| {
+        let a = a.unwrap_or_else(|| panic!("{name}: {what} n/a for continuous+proxy"));
+        // A nearest value of n/a (no interior left) counts as worse than any number.
+        if let Some(b) = b {
+            assert!(a <= b + floor, "{name}: {what}: continuous+proxy {a} vs nearest {b}");
+        }
+    };
+    not_worse(c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE");
+    not_worse(c.outside.median_rel, n.outside.median_rel, "outside median");
+    not_worse(c.outside.p95_rel, n.outside.p95_rel, "outside p95");
+    not_worse(c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE");
+    not_worse(c.inside.median_rel, n.inside.median_rel, "inside median");
+    not_worse(c.inside.doubled, n.inside.doubled, "inside doubled");
+    not_worse(c.held_out.log_rmse, n.held_out.log_rmse, "held-out log RMSE");
+    not_worse(
+        Some(c.outside.silhouette_px),
+        Some(n.outside.silhouette_px),
+        "silhouette",
+    );
+    not_worse(Some(c.intensity_median), Some(n.intensity_median), "intensity median");
+    not_worse(Some(c.intensity_max), Some(n.intensity_max), "intensity max");
+    not_worse(Some(c.flux_error), Some(n.flux_error), "flux");
+    not_worse(Some(c.jump), Some(n.jump), "jump");
+}
+
+/// Evaluates `names` with captures of at most `max_capture_px` (the pitch rule decides below it).
+fn run(names: &[&str], tag: &str, max_capture_px: u32) {
+    let _g = gpu_common::GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = gpu_common::renderer() else {
+        return;
+    };
+    let cfg = config(tag, max_capture_px);
+    let mut reports = Vec::new();
+    for name in names {
+        reports.push(evaluate(&mut r, name, &cfg, &|m| eprintln!("  {m}")).unwrap());
+    }
+    let _ = std::fs::remove_dir_all(&cfg.work_dir);
+    eprintln!("{}", format_table(&reports));
+    for rep in &reports {
+        check(rep);
+    }
+    gpu_common::assert_no_validation_messages();
+}
+
+#[test]
+fn lambertian_disc_and_rectangle_meet_the_contract() {
+    run(&["disc", "rect"], "flat", 128);
+}
+
+#[test]
+fn star_panel_meets_the_contract() {
+    // The star's 10 mm sectors ask for 1.67 mm pixels: 343 px captures.
+    run(&["star-panel"], "star", 352);
+}
