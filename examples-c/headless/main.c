@@ -1,7 +1,7 @@
 /* lumiview headless example: render a luminaire's appearance, export the image as an opaque fd,
  * import it into this program's own Vulkan device, and check what came through.
  *
- *   headless [FILE] [--out DIR] [--exposure E] [--validation]
+ *   headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield]
  *
  * For three views from below the luminaire (perspective cameras 3 m from its photometric centre,
  * looking at it; GL depth range, top-left origin) it checks, and exits non-zero if any fails:
@@ -11,7 +11,15 @@
  *   3. the depth there equals GL's window depth of the photometric centre within 1e-5;
  *   4. a corner pixel is empty (alpha 0), and two points of the opening projected with the camera's
  *      matrices land on lumiview's image (it registers with the camera, top-left origin).
- * and writes a tone-mapped PNG of each view into DIR. */
+ * and writes a tone-mapped PNG of each view into DIR.
+ *
+ * Then the same for a near-field luminaire loaded through the same call: the bundled synthetic
+ * `two-planes` scan (generated on first run with the lumiview CLI, cached under target/, with its
+ * proxy mesh; lv_scan.h), placed 10 m away. Three views from in front of it (1.5 m, fov 12°) check the
+ * import byte for byte, the centre pixel's luminance against the scan's ground truth (the opaque
+ * centre tile, 3,000 cd/m², within 1 %), a neighbouring tile's (1,200 cd/m²), the proxy's depth and an
+ * empty corner; then each selection mode (LUMI_SELECTION_*) with the proxy, and the bounding mode
+ * without it (drawn, stand-in depth through the capture centre). */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -25,6 +33,7 @@
 #include "lv_lumi.h"
 #include "lv_math.h"
 #include "lv_png.h"
+#include "lv_scan.h"
 #include "vk_import.h"
 
 #ifndef LUMIVIEW_REPO_ROOT
@@ -45,20 +54,36 @@ typedef struct view {
 
 static const view VIEWS[] = {{30.0, 40.0}, {0.0, 0.0}, {90.0, 80.0}};
 
+/* The near-field luminaire: its frame is the world translated by NF_OFFSET (out of the far-field
+ * views, which see ±0.5 m around the origin). Its views: 1.5 m from its centre, fov 12° (±0.16 m). */
+#define NF_OFFSET_X 10.0
+#define NF_DISTANCE_M 1.5
+#define NF_FOVY_DEG 12.0
+#define NF_TOLERANCE 0.01
+/* A point on the front tile i = 3, j = 2 (odd: 1,200 cd/m²), beside the centre tile. */
+#define NF_TILE_X_M 0.04
+#define NF_TILE_CD_M2 1200.0
+/* PNG exposure of the near-field views (m²/cd): 3,000 cd/m² at 0.55. */
+#define NF_PNG_EXPOSURE 4e-4
+
+static const view NF_VIEWS[] = {{0.0, 0.0}, {30.0, 40.0}, {200.0, 60.0}};
+
 typedef struct options {
     const char *file;
     const char *out_dir;
     double exposure;
     bool validation;
+    bool nearfield;
 } options;
 
 static void usage(FILE *f) {
     fprintf(f,
-            "usage: headless [FILE] [--out DIR] [--exposure E] [--validation]\n"
-            "  FILE          IES or EULUMDAT file (default %s)\n"
-            "  --out DIR     where the PNGs go (default: the current directory)\n"
-            "  --exposure E  tone-mapping exposure for the PNGs in m^2/cd (default 1e-4)\n"
-            "  --validation  Vulkan validation on lumiview's device and on ours; any message fails\n",
+            "usage: headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield]\n"
+            "  FILE            IES or EULUMDAT file (default %s)\n"
+            "  --out DIR       where the PNGs go (default: the current directory)\n"
+            "  --exposure E    tone-mapping exposure for the far-field PNGs in m^2/cd (default 1e-4)\n"
+            "  --validation    Vulkan validation on lumiview's device and on ours; any message fails\n"
+            "  --no-nearfield  skip the near-field luminaire (the bundled two-planes scan)\n",
             DEFAULT_FILE);
 }
 
@@ -68,6 +93,7 @@ static int parse_args(int argc, char **argv, options *o) {
     o->out_dir = ".";
     o->exposure = 1e-4;
     o->validation = false;
+    o->nearfield = true;
     bool have_file = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -86,6 +112,8 @@ static int parse_args(int argc, char **argv, options *o) {
             i++;
         } else if (strcmp(a, "--validation") == 0) {
             o->validation = true;
+        } else if (strcmp(a, "--no-nearfield") == 0) {
+            o->nearfield = false;
         } else if (a[0] != '-' && !have_file) {
             o->file = a;
             have_file = true;
@@ -113,21 +141,29 @@ static bool ensure_dir(const char *dir) {
     return true;
 }
 
-/* Camera 3 m from the origin along (C, γ) of the luminaire frame (= world here), looking at it. */
-static bool make_camera(const view *v, lumi_camera *cam, float clip_from_world[16]) {
-    lv_vec3 eye = lv_vec3_scale(lv_direction_cg(v->c_deg, v->gamma_deg), DISTANCE_M);
-    lv_vec3 up = fabs(lv_vec3_normalize(eye).z) > 0.99 ? lv_vec3_make(0, 1, 0) : lv_vec3_make(0, 0, 1);
+/* Camera `distance` m from `centre` along (C, γ) of the luminaire frame (= world axes here), looking
+ * at it. */
+static bool make_camera_at(const view *v, lv_vec3 centre, double distance, double fovy_deg, lumi_camera *cam,
+                           float clip_from_world[16]) {
+    lv_vec3 dir = lv_direction_cg(v->c_deg, v->gamma_deg);
+    lv_vec3 eye = lv_vec3_add(centre, lv_vec3_scale(dir, distance));
+    lv_vec3 up = fabs(dir.z) > 0.99 ? lv_vec3_make(0, 1, 0) : lv_vec3_make(0, 0, 1);
     *cam = lumi_camera_default();
-    if (!lv_mat4_look_at(cam->view, eye, lv_vec3_make(0, 0, 0), up)) {
+    if (!lv_mat4_look_at(cam->view, eye, centre, up)) {
         fprintf(stderr, "headless: degenerate camera for C %g, γ %g\n", v->c_deg, v->gamma_deg);
         return false;
     }
-    lv_mat4_perspective_gl(cam->projection, FOVY_DEG, 1.0, 0.1, 10.0);
+    lv_mat4_perspective_gl(cam->projection, fovy_deg, 1.0, 0.1, 10.0);
     cam->depth_range = LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE;
     cam->reversed_z = false;
     cam->origin = LUMI_ORIGIN_TOP_LEFT;
     lv_mat4_mul(clip_from_world, cam->projection, cam->view);
     return true;
+}
+
+/* Camera 3 m from the origin along (C, γ) of the luminaire frame (= world here), looking at it. */
+static bool make_camera(const view *v, lumi_camera *cam, float clip_from_world[16]) {
+    return make_camera_at(v, lv_vec3_make(0, 0, 0), DISTANCE_M, FOVY_DEG, cam, clip_from_world);
 }
 
 /* Exports one attachment and reads it through the Vulkan host into `out`. */
@@ -167,6 +203,23 @@ static bool compare_with_read_back(lumi_context *ctx, lumi_target target, uint32
         return false;
     }
     return true;
+}
+
+/* Renders one frame and reads colour and depth through the Vulkan host, checking them against
+ * lumi_target_read_pixels byte for byte. */
+static bool render_and_import(lumi_context *ctx, lumi_target target, const lumi_camera *cam, vk_host *vk,
+                              float *color, float *depth, uint8_t *scratch) {
+    lumi_render_options ro = lumi_render_options_default();
+    ro.output = LUMI_OUTPUT_LUMINANCE;
+    if (!lv_lumi_ok(lumi_render(ctx, target, cam, &ro), "lumi_render")) return false;
+    size_t color_len = (size_t)SIZE * SIZE * 16, depth_len = (size_t)SIZE * SIZE * 4;
+    if (!import_attachment(ctx, target, LUMI_ATTACHMENT_COLOR, vk, color, color_len) ||
+        !import_attachment(ctx, target, LUMI_ATTACHMENT_DEPTH, vk, depth, depth_len))
+        return false;
+    return compare_with_read_back(ctx, target, LUMI_ATTACHMENT_COLOR, (const uint8_t *)color, scratch, color_len,
+                                  16, "colour") &&
+           compare_with_read_back(ctx, target, LUMI_ATTACHMENT_DEPTH, (const uint8_t *)depth, scratch, depth_len, 4,
+                                  "depth");
 }
 
 static bool write_png(const char *path, const float *rgba, double exposure) {
@@ -211,19 +264,7 @@ static bool run_view(lumi_context *ctx, lumi_luminaire lum, const lumi_luminaire
     lumi_camera cam;
     float clip_from_world[16];
     if (!make_camera(v, &cam, clip_from_world)) return false;
-    lumi_render_options ro = lumi_render_options_default();
-    ro.output = LUMI_OUTPUT_LUMINANCE;
-    if (!lv_lumi_ok(lumi_render(ctx, target, &cam, &ro), "lumi_render")) return false;
-
-    size_t color_len = (size_t)SIZE * SIZE * 16, depth_len = (size_t)SIZE * SIZE * 4;
-    if (!import_attachment(ctx, target, LUMI_ATTACHMENT_COLOR, vk, color, color_len) ||
-        !import_attachment(ctx, target, LUMI_ATTACHMENT_DEPTH, vk, depth, depth_len))
-        return false;
-    if (!compare_with_read_back(ctx, target, LUMI_ATTACHMENT_COLOR, (const uint8_t *)color, scratch, color_len, 16,
-                                "colour") ||
-        !compare_with_read_back(ctx, target, LUMI_ATTACHMENT_DEPTH, (const uint8_t *)depth, scratch, depth_len, 4,
-                                "depth"))
-        return false;
+    if (!render_and_import(ctx, target, &cam, vk, color, depth, scratch)) return false;
 
     bool ok = true;
     size_t centre = (size_t)(SIZE / 2) * SIZE + SIZE / 2;
@@ -270,12 +311,176 @@ static bool run_view(lumi_context *ctx, lumi_luminaire lum, const lumi_luminaire
     return ok;
 }
 
+/* The pixel (top-left origin) where a world point projects, or false when outside the image. */
+static bool pixel_of(const float clip_from_world[16], lv_vec3 p, long *x, long *y) {
+    lv_vec3 ndc;
+    if (!lv_mat4_transform_point(clip_from_world, p, &ndc)) return false;
+    *x = (long)floor((ndc.x * 0.5 + 0.5) * SIZE);
+    *y = (long)floor((0.5 - ndc.y * 0.5) * SIZE);
+    return *x >= 0 && *y >= 0 && *x < (long)SIZE && *y < (long)SIZE;
+}
+
+/* GL window depth of a world point: (z_ndc + 1) / 2. */
+static double window_depth(const float clip_from_world[16], lv_vec3 p) {
+    double h[4] = {p.x, p.y, p.z, 1.0}, clip[4];
+    lv_mat4_transform4(clip_from_world, h, clip);
+    return 0.5 * clip[2] / clip[3] + 0.5;
+}
+
+static double rel_err(double got, double want) { return want != 0.0 ? (got - want) / want : INFINITY; }
+
+/* One near-field view: renders it in `mode` (proxy on or off), imports it and checks the centre (the
+ * scan's ground truth, or with the proxy off that something is drawn at the stand-in depth), the
+ * neighbouring tile with the proxy, and an empty corner. `png` NULL writes no image. */
+static bool run_nearfield_view(lumi_context *ctx, lumi_instance inst, lumi_target target, vk_host *vk,
+                               const options *o, int index, uint32_t mode, bool use_proxy, float *color,
+                               float *depth, uint8_t *scratch, bool write_image) {
+    const view *v = &NF_VIEWS[index];
+    lv_vec3 centre = lv_vec3_make(NF_OFFSET_X, 0, 0);
+    lumi_camera cam;
+    float clip_from_world[16];
+    if (!make_camera_at(v, centre, NF_DISTANCE_M, NF_FOVY_DEG, &cam, clip_from_world)) return false;
+    if (!lv_lumi_ok(lumi_instance_set_nearfield(ctx, inst, mode, use_proxy), "lumi_instance_set_nearfield"))
+        return false;
+    if (!render_and_import(ctx, target, &cam, vk, color, depth, scratch)) return false;
+
+    bool ok = true;
+    size_t c = (size_t)(SIZE / 2) * SIZE + SIZE / 2;
+    double l = color[c * 4], alpha = color[c * 4 + 3], d = depth[c];
+    double d_pred = window_depth(clip_from_world, centre), rel = rel_err(l, LV_SCAN_CENTRE_CD_M2);
+    long tx = -1, ty = -1;
+    double l_tile = NAN, rel_tile = NAN;
+    if (use_proxy) {
+        if (!(fabs(rel) <= NF_TOLERANCE) || alpha != 1.0) {
+            fprintf(stderr, "headless: near-field view %d (%s, proxy): centre L = %.6g cd/m² (alpha %g), the scan's "
+                            "centre tile is %.0f cd/m²: off by more than %.0f %%\n",
+                    index + 1, lv_selection_name(mode), l, alpha, LV_SCAN_CENTRE_CD_M2, NF_TOLERANCE * 100);
+            ok = false;
+        }
+        if (!pixel_of(clip_from_world, lv_vec3_make(NF_OFFSET_X + NF_TILE_X_M, 0, 0), &tx, &ty)) {
+            fprintf(stderr, "headless: near-field view %d: the neighbouring tile projects outside the image\n",
+                    index + 1);
+            ok = false;
+        } else {
+            l_tile = color[((size_t)ty * SIZE + (size_t)tx) * 4];
+            rel_tile = rel_err(l_tile, NF_TILE_CD_M2);
+            if (!(fabs(rel_tile) <= NF_TOLERANCE)) {
+                fprintf(stderr, "headless: near-field view %d (%s, proxy): pixel %ld,%ld on tile (3, 2) shows L = %.6g "
+                                "cd/m², the scan's tile is %.0f cd/m² (flipped or misregistered image?)\n",
+                        index + 1, lv_selection_name(mode), tx, ty, l_tile, NF_TILE_CD_M2);
+                ok = false;
+            }
+        }
+    } else if (!(l > 0.0) || alpha != 1.0) {
+        fprintf(stderr, "headless: near-field view %d (%s, no proxy): nothing drawn at the centre (L %g, alpha %g)\n",
+                index + 1, lv_selection_name(mode), l, alpha);
+        ok = false;
+    }
+    /* With the proxy: the centre tile's surface (z = 0 through the centre); without: the stand-in plane
+     * through the capture centre facing the eye. Both pass through the centre. */
+    if (!(fabs(d - d_pred) <= DEPTH_TOLERANCE)) {
+        fprintf(stderr, "headless: near-field view %d (%s, proxy %s): centre depth %.7f, GL window depth of the "
+                        "centre %.7f\n", index + 1, lv_selection_name(mode), use_proxy ? "on" : "off", d, d_pred);
+        ok = false;
+    }
+    if (color[3] != 0.0f || depth[0] != 1.0f) {
+        fprintf(stderr, "headless: near-field view %d: corner pixel not empty (alpha %g, depth %g)\n", index + 1,
+                color[3], depth[0]);
+        ok = false;
+    }
+    char path[4096] = "";
+    if (write_image) {
+        int n = snprintf(path, sizeof path, "%s/headless-nearfield-view%d-c%g-g%g.png", o->out_dir, index + 1,
+                         v->c_deg, v->gamma_deg);
+        if (n < 0 || (size_t)n >= sizeof path) {
+            fprintf(stderr, "headless: output path too long\n");
+            return false;
+        }
+        if (!write_png(path, color, NF_PNG_EXPOSURE)) ok = false;
+    }
+    if (use_proxy)
+        printf("nearfield view %d (C %5.1f°, γ %4.1f°) %-10s proxy on : centre L = %.6g cd/m² (scan %.0f, %+.4f %%), "
+               "tile (3, 2) at %ld,%ld L = %.6g (scan %.0f, %+.4f %%); depth %.6f (predicted %.6f); import == "
+               "read-back; %s%s%s\n",
+               index + 1, v->c_deg, v->gamma_deg, lv_selection_name(mode), l, LV_SCAN_CENTRE_CD_M2, rel * 100.0, tx,
+               ty, l_tile, NF_TILE_CD_M2, rel_tile * 100.0, d, d_pred, ok ? "ok" : "FAILED", path[0] ? " -> " : "",
+               path);
+    else
+        printf("nearfield view %d (C %5.1f°, γ %4.1f°) %-10s proxy off: centre L = %.6g cd/m² (drawn; no ground truth "
+               "without the proxy: the cameras are sampled along the view direction), stand-in depth %.6f "
+               "(predicted %.6f); import == read-back; %s\n",
+               index + 1, v->c_deg, v->gamma_deg, lv_selection_name(mode), l, d, d_pred, ok ? "ok" : "FAILED");
+    return ok;
+}
+
+/* Loads the bundled scan with its proxy, places it and runs the near-field views and mode checks.
+ * Returns the number of failures. */
+static int run_nearfield(lumi_context *ctx, const lv_scan_files *files, lumi_target target, vk_host *vk,
+                         const options *o, float *color, float *depth, uint8_t *scratch) {
+    lumi_luminaire lum = 0;
+    lumi_instance inst = 0;
+    int failed = 0;
+    lumi_luminaire_desc d = lumi_luminaire_desc_default();
+    d.proxy_path = files->proxy;
+    if (!lv_lumi_ok(lumi_luminaire_load_ex(ctx, files->pack, &d, &lum), "lumi_luminaire_load_ex")) return 1;
+    lumi_luminaire_info info;
+    if (!lv_lumi_ok(lumi_luminaire_get_info(ctx, lum, &info), "lumi_luminaire_get_info")) {
+        failed++;
+        goto done;
+    }
+    printf("near-field luminaire %s: kind %s, %u cameras, capture sphere r = %.3f m, content r = %.3f m, proxy %s, "
+           "%.1f MiB on the GPU (budget %.0f MiB)\n",
+           files->pack, info.kind == LUMI_LUMINAIRE_NEARFIELD ? "LUMI_LUMINAIRE_NEARFIELD" : "far-field?",
+           info.camera_count, info.capture_radius_m, info.content_radius_m, info.has_proxy ? files->proxy : "none",
+           info.gpu_bytes / 1048576.0, info.budget_bytes / 1048576.0);
+    if (info.kind != LUMI_LUMINAIRE_NEARFIELD || !info.has_proxy || info.camera_count == 0) {
+        fprintf(stderr, "headless: lumi_luminaire_get_info does not describe the scan as a near-field luminaire with "
+                        "a proxy\n");
+        failed++;
+        goto done;
+    }
+    /* A far-field-only call on it must be refused, not answered. */
+    double cd = -1.0;
+    if (lumi_luminaire_sample(ctx, lum, 0.0, 0.0, &cd, NULL) != LUMI_STATUS_INVALID_ARGUMENT || cd != -1.0) {
+        fprintf(stderr, "headless: lumi_luminaire_sample on a near-field luminaire did not fail cleanly\n");
+        failed++;
+    }
+    float model[16];
+    lv_mat4_identity(model);
+    model[12] = (float)NF_OFFSET_X;
+    if (!lv_lumi_ok(lumi_instance_create(ctx, lum, model, &inst), "lumi_instance_create")) {
+        failed++;
+        goto done;
+    }
+    int n = (int)(sizeof NF_VIEWS / sizeof NF_VIEWS[0]);
+    for (int i = 0; i < n; i++)
+        if (!run_nearfield_view(ctx, inst, target, vk, o, i, LUMI_SELECTION_CONTINUOUS, true, color, depth, scratch,
+                                true))
+            failed++;
+    /* The modes, from view 2 (off-axis). */
+    const uint32_t modes[] = {LUMI_SELECTION_NEAREST, LUMI_SELECTION_IDW4};
+    for (size_t m = 0; m < sizeof modes / sizeof modes[0]; m++)
+        if (!run_nearfield_view(ctx, inst, target, vk, o, 1, modes[m], true, color, depth, scratch, false)) failed++;
+    if (!run_nearfield_view(ctx, inst, target, vk, o, 1, LUMI_SELECTION_CONTINUOUS, false, color, depth, scratch,
+                            false))
+        failed++;
+    if (failed == 0) printf("headless: near-field: all %d views and 3 mode checks passed\n", n);
+
+done:
+    if (inst && !lv_lumi_ok(lumi_instance_destroy(ctx, inst), "lumi_instance_destroy")) failed++;
+    if (lum && !lv_lumi_ok(lumi_luminaire_destroy(ctx, lum), "lumi_luminaire_destroy")) failed++;
+    return failed;
+}
+
 int main(int argc, char **argv) {
     setvbuf(stdout, NULL, _IOLBF, 0); /* keep stdout and stderr in order in logs */
     options o;
     int pa = parse_args(argc, argv, &o);
     if (pa != 0) return pa == 1 ? 0 : 2;
     if (!ensure_dir(o.out_dir)) return 1;
+    /* The near-field scan first: generating it runs the lumiview CLI, before any Vulkan device exists. */
+    lv_scan_files scan;
+    if (o.nearfield && !lv_scan_ensure(LUMIVIEW_REPO_ROOT, &scan)) return 1;
 
     int rc = 1;
     lumi_context *ctx = NULL;
@@ -332,13 +537,15 @@ int main(int argc, char **argv) {
     int failed = 0;
     for (int i = 0; i < (int)(sizeof VIEWS / sizeof VIEWS[0]); i++)
         if (!run_view(ctx, lum, &info, target, &vk, &o, i, color, depth, scratch)) failed++;
+    if (failed == 0) printf("headless: all %d views passed\n", (int)(sizeof VIEWS / sizeof VIEWS[0]));
+    if (o.nearfield) failed += run_nearfield(ctx, &scan, target, &vk, &o, color, depth, scratch);
     if (o.validation && (lv_log_errors() || lv_log_warnings() || vk_host_validation_errors())) {
         fprintf(stderr, "headless: validation reported %u lumiview errors, %u warnings, %u Vulkan-host messages\n",
                 lv_log_errors(), lv_log_warnings(), vk_host_validation_errors());
         failed++;
     }
     if (failed == 0) {
-        printf("headless: all %d views passed\n", (int)(sizeof VIEWS / sizeof VIEWS[0]));
+        printf("headless: all checks passed\n");
         rc = 0;
     } else {
         fprintf(stderr, "headless: FAILED (%d problem%s)\n", failed, failed == 1 ? "" : "s");
