@@ -7,6 +7,7 @@
 
 #include "lv_lumi.h"
 #include "lv_png.h"
+#include "lv_scan.h"
 
 bool check_probe(const scene *s, const lumi_context *ctx, lumi_instance inst, lv_vec3 p) {
     double e_shader = 0.0, e_lib = 0.0;
@@ -184,6 +185,82 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
                 y, px[0], px[1], px[2], expect_room ? box->name : "luminaire", lv_to_u8(expected[0]),
                 lv_to_u8(expected[1]), lv_to_u8(expected[2]), PIXEL_TOLERANCE * 255.0);
     return ok && footprint_ok;
+}
+
+bool check_nearfield_pixel(const scene *s, const gl_imported *color, const gl_imported *depth, const frame_view *v,
+                           const float nf_model[16], bool proxy_expected, const char *mode_name) {
+    float vp[16], inv[16];
+    lv_mat4_mul(vp, v->projection, v->view);
+    lv_vec3 centre = lv_vec3_make(nf_model[12], nf_model[13], nf_model[14]), ndc;
+    if (!lv_mat4_transform_point(vp, centre, &ndc) || fabs(ndc.x) >= 1.0 || fabs(ndc.y) >= 1.0 || fabs(ndc.z) >= 1.0) {
+        fprintf(stderr, "glfw_host: the near-field luminaire's centre is outside the view; choose --camera/--target "
+                        "that see it (README)\n");
+        return false;
+    }
+    GLint gx = (GLint)floor((ndc.x * 0.5 + 0.5) * v->width), gy = (GLint)floor((ndc.y * 0.5 + 0.5) * v->height);
+    long x = gx, y = v->height - 1 - gy; /* from the top-left, like the screenshot */
+    unsigned char px[4] = {0, 0, 0, 0};
+    glReadBuffer(GL_BACK);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(gx, gy, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, px);
+    float lib[4] = {0, 0, 0, 0}, lib_depth = 1.0f;
+    glGetTextureSubImage(color->texture, 0, gx, gy, 0, 1, 1, 1, GL_RGBA, GL_FLOAT, (GLsizei)sizeof lib, lib);
+    glGetTextureSubImage(depth->texture, 0, gx, gy, 0, 1, 1, 1, GL_RED, GL_FLOAT, (GLsizei)sizeof lib_depth,
+                         &lib_depth);
+    if (!lv_gl_ok("reading the near-field pixel")) return false;
+
+    /* The room along the pixel's ray must be behind lumiview's image there. */
+    if (!lv_mat4_invert(inv, vp)) {
+        fprintf(stderr, "glfw_host: singular view-projection matrix\n");
+        return false;
+    }
+    double nx = (gx + 0.5) / v->width * 2.0 - 1.0, ny = (gy + 0.5) / v->height * 2.0 - 1.0;
+    lv_vec3 a, b, normal;
+    if (!lv_mat4_transform_point(inv, lv_vec3_make(nx, ny, -1.0), &a) ||
+        !lv_mat4_transform_point(inv, lv_vec3_make(nx, ny, 1.0), &b)) {
+        fprintf(stderr, "glfw_host: cannot unproject pixel %ld,%ld\n", x, y);
+        return false;
+    }
+    lv_vec3 dir = lv_vec3_normalize(lv_vec3_sub(b, a));
+    double t = 0.0, room_depth = 1.0;
+    const scene_box *box = NULL;
+    if (scene_ray_hit(s, v->eye, dir, &t, &normal, &box)) {
+        lv_vec3 hit = lv_vec3_add(v->eye, lv_vec3_scale(dir, t));
+        double clip[4], hp4[4] = {hit.x, hit.y, hit.z, 1.0};
+        lv_mat4_transform4(vp, hp4, clip);
+        room_depth = 0.5 * clip[2] / clip[3] + 0.5;
+    }
+    if (!(lib[3] > 0.0f) || !(lib_depth < room_depth)) {
+        fprintf(stderr, "glfw_host: at pixel %ld,%ld (the near-field luminaire's centre) lumiview drew %s (alpha %g, "
+                        "depth %g; the %s is at depth %g): choose a view where the luminaire is visible\n",
+                x, y, lib[3] > 0.0f ? "something behind the room" : "nothing", (double)lib[3], (double)lib_depth,
+                box ? box->name : "room", room_depth);
+        return false;
+    }
+    double shown = px[0] / 255.0, l_img = lib[0];
+    double l_pred = proxy_expected ? LV_SCAN_CENTRE_CD_M2 : l_img;
+    double t_pred = lv_tonemap(l_pred, v->exposure);
+    double rel = (l_img - LV_SCAN_CENTRE_CD_M2) / LV_SCAN_CENTRE_CD_M2;
+    bool ok = fabs(shown - t_pred) <= PIXEL_TOLERANCE + 1e-9 && fabs(px[1] / 255.0 - t_pred) <= PIXEL_TOLERANCE + 1e-9 &&
+              fabs(px[2] / 255.0 - t_pred) <= PIXEL_TOLERANCE + 1e-9;
+    if (proxy_expected && !(fabs(rel) <= NEARFIELD_TOLERANCE)) ok = false;
+    if (proxy_expected)
+        printf("check-nearfield-pixel %ld,%ld (%s, proxy on): lumiview L = %.6g cd/m² (scan's centre tile %.0f, %+.3f "
+               "%%), composited = [%u %u %u], predicted %.4f [%u] (exposure %g); depth %.6f in front of the %s (%.6f) "
+               "-> %s\n",
+               x, y, mode_name, l_img, LV_SCAN_CENTRE_CD_M2, rel * 100.0, px[0], px[1], px[2], t_pred, lv_to_u8(t_pred),
+               v->exposure, (double)lib_depth, box ? box->name : "room", room_depth, ok ? "PASS" : "FAIL");
+    else
+        printf("check-nearfield-pixel %ld,%ld (%s, proxy off): lumiview L = %.6g cd/m² (no ground truth without the "
+               "proxy), composited = [%u %u %u], tonemap of lumiview's value %.4f [%u]; stand-in depth %.6f in front "
+               "of the %s (%.6f) -> %s\n",
+               x, y, mode_name, l_img, px[0], px[1], px[2], t_pred, lv_to_u8(t_pred), (double)lib_depth,
+               box ? box->name : "room", room_depth, ok ? "PASS" : "FAIL");
+    if (!ok)
+        fprintf(stderr, "glfw_host: the near-field pixel %ld,%ld shows [%u %u %u] with lumiview L = %.6g cd/m²; expected "
+                        "[%u] %s\n", x, y, px[0], px[1], px[2], l_img, lv_to_u8(t_pred),
+                proxy_expected ? "from the scan's 3000 cd/m² (within 2 % and 2/255)" : "(within 2/255)");
+    return ok;
 }
 
 bool write_screenshot(const char *path, int width, int height) {

@@ -42,6 +42,17 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
                            const gl_imported *color, const gl_imported *depth, const frame_view *v, long x,
                            long y);
 
+/* The near-field luminaire's pixel: where the host's matrices project its frame's origin (`nf_model`'s
+ * translation, on the bundled scan's opaque centre tile). It must be lumiview's (its depth nearer
+ * than the room's along the pixel's ray; choose a view where it is). With the proxy
+ * (`proxy_expected`): lumiview's luminance there is the scan's ground truth LV_SCAN_CENTRE_CD_M2 within
+ * NEARFIELD_TOLERANCE, and the composited pixel shows tonemap(L_truth · exposure) within
+ * PIXEL_TOLERANCE. Without: lumiview drew something there (no ground truth: the cameras are sampled
+ * along the view direction), and the composite shows tonemap of lumiview's own value. */
+#define NEARFIELD_TOLERANCE 0.02
+bool check_nearfield_pixel(const scene *s, const gl_imported *color, const gl_imported *depth, const frame_view *v,
+                           const float nf_model[16], bool proxy_expected, const char *mode_name);
+
 /* Reads the back buffer (bottom-up) and writes it top-down as an RGB PNG. */
 bool write_screenshot(const char *path, int width, int height);
 

@@ -1,11 +1,16 @@
 /* lumiview GLFW host: an OpenGL 4.5 application that imports lumiview's images once through
- * GL_EXT_memory_object_fd and, every frame, renders the luminaire's appearance with lumiview (the
- * host's camera), draws a room lit by the luminaire's photometry from its look-up table, and
- * composites the two by depth. See examples-c/README.md for the flags and what each check proves.
+ * GL_EXT_memory_object_fd and, every frame, renders the luminaires' appearance with lumiview (the
+ * host's camera), draws a room lit by the far-field luminaire's photometry from its look-up table,
+ * and composites the two by depth. Besides the far-field luminaire hangs a near-field one: a scan
+ * (by default the bundled synthetic two-planes scan, generated on first run, lv_scan.h) on a stand,
+ * loaded through the same lumi_luminaire_load_ex call. See examples-c/README.md for the flags and
+ * what each check proves.
  *
  * Interactive: drag to orbit, scroll to zoom, +/- exposure, S solid overlay, H housing overlay,
- * Esc quits. Test mode (any of --frames, --screenshot, --probe, --check-luminaire-pixel): runs N
- * frames (default 1), runs the checks on the last one and exits non-zero if one fails. */
+ * 1/2/3 near-field selection nearest/idw4/continuous, P near-field proxy on/off (printed and shown in
+ * the title), Esc quits. Test mode (any of --frames, --screenshot, --probe, --check-luminaire-pixel,
+ * --check-nearfield-pixel): runs N frames (default 1), runs the checks on the last one and exits
+ * non-zero if one fails. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,6 +27,7 @@
 #include "lv_args.h"
 #include "lv_lumi.h"
 #include "lv_math.h"
+#include "lv_scan.h"
 #include "scene.h"
 
 #ifndef LUMIVIEW_REPO_ROOT
@@ -40,6 +46,10 @@
 
 typedef struct options {
     const char *file;
+    const char *scan;  /* NULL: the bundled scan; "none": no near-field luminaire */
+    const char *proxy; /* NULL: the bundled scan's proxy (or none for another scan); "none": no proxy */
+    uint32_t nf_mode;
+    bool nf_proxy, check_nearfield;
     const char *screenshot;
     long frames; /* 0: interactive */
     int probe_count;
@@ -59,6 +69,8 @@ typedef struct app {
     lv_vec3 target;
     double exposure;
     uint32_t overlays;
+    uint32_t nf_mode;
+    bool nf_proxy, nf_dirty;
     bool dragging;
     double last_x, last_y;
 } app;
@@ -67,6 +79,12 @@ static void usage(FILE *f) {
     fprintf(f,
             "usage: glfw_host [options]\n"
             "  --file PATH                  IES or EULUMDAT file (default %s)\n"
+            "  --scan PATH|none             near-field scan: .lvpack, JSON manifest or TM-25 ray file (default: the\n"
+            "                               bundled two-planes scan, generated on first run); none: no near-field luminaire\n"
+            "  --scan-proxy PATH|none       its proxy glTF (default: the bundled scan's; none for another scan)\n"
+            "  --nearfield-mode nearest|idw4|continuous  near-field camera selection at start (default continuous; keys 1/2/3)\n"
+            "  --nearfield-proxy on|off     use the proxy at start (default on; key P)\n"
+            "  --check-nearfield-pixel      the near-field luminaire's centre pixel vs its scan's ground truth\n"
             "  --frames N                   run N frames, the camera orbiting %.1f° per frame (clockwise seen from above), then exit\n"
             "  --screenshot PATH            write the last frame as PNG\n"
             "  --probe X,Y,Z                floor illuminance at a world point: shader vs library (repeatable)\n"
@@ -99,6 +117,8 @@ static bool parse_on_off(const char *s, bool *out) {
 static int parse_args(int argc, char **argv, options *o) {
     memset(o, 0, sizeof *o);
     o->file = DEFAULT_FILE;
+    o->nf_mode = LUMI_SELECTION_CONTINUOUS;
+    o->nf_proxy = true;
     o->occluder = true;
     o->indirect = true;
     o->exposure = 0.02;
@@ -117,12 +137,24 @@ static int parse_args(int argc, char **argv, options *o) {
         } else if (strcmp(a, "--test-uuid-mismatch") == 0) {
             o->test_uuid_mismatch = true;
             continue;
+        } else if (strcmp(a, "--check-nearfield-pixel") == 0) {
+            o->check_nearfield = true;
+            test_mode = true;
+            continue;
         } else if (!v) {
             fprintf(stderr, "glfw_host: %s needs a value (or is unknown)\n", a);
             usage(stderr);
             return 2;
         } else if (strcmp(a, "--file") == 0) {
             o->file = v;
+        } else if (strcmp(a, "--scan") == 0) {
+            o->scan = v;
+        } else if (strcmp(a, "--scan-proxy") == 0) {
+            o->proxy = v;
+        } else if (strcmp(a, "--nearfield-mode") == 0) {
+            bad = !lv_parse_selection(v, &o->nf_mode);
+        } else if (strcmp(a, "--nearfield-proxy") == 0) {
+            bad = !parse_on_off(v, &o->nf_proxy);
         } else if (strcmp(a, "--frames") == 0) {
             bad = !lv_parse_int(v, 1, 1000000, &o->frames);
             test_mode = true;
@@ -172,6 +204,14 @@ static int parse_args(int argc, char **argv, options *o) {
         i++;
     }
     if (test_mode && o->frames == 0) o->frames = 1;
+    if (o->check_nearfield && o->scan && strcmp(o->scan, "none") == 0) {
+        fprintf(stderr, "glfw_host: --check-nearfield-pixel needs the near-field luminaire (not --scan none)\n");
+        return 2;
+    }
+    if (o->check_nearfield && o->scan) {
+        fprintf(stderr, "glfw_host: --check-nearfield-pixel knows the ground truth of the bundled scan only\n");
+        return 2;
+    }
     return 0;
 }
 
@@ -207,6 +247,21 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods) {
         break;
     case GLFW_KEY_H:
         if (action == GLFW_PRESS) a->overlays ^= LUMI_OVERLAY_HOUSING;
+        break;
+    case GLFW_KEY_1:
+    case GLFW_KEY_2:
+    case GLFW_KEY_3:
+        if (action == GLFW_PRESS) {
+            a->nf_mode = key == GLFW_KEY_1 ? LUMI_SELECTION_NEAREST
+                         : key == GLFW_KEY_2 ? LUMI_SELECTION_IDW4 : LUMI_SELECTION_CONTINUOUS;
+            a->nf_dirty = true;
+        }
+        break;
+    case GLFW_KEY_P:
+        if (action == GLFW_PRESS) {
+            a->nf_proxy = !a->nf_proxy;
+            a->nf_dirty = true;
+        }
         break;
     default: break;
     }
@@ -292,14 +347,25 @@ int main(int argc, char **argv) {
     options o;
     int pa = parse_args(argc, argv, &o);
     if (pa) return pa == 1 ? 0 : 2;
+    /* The near-field scan first: generating it runs the lumiview CLI, before any window or device. */
+    bool nearfield = !(o.scan && strcmp(o.scan, "none") == 0);
+    lv_scan_files scan_files;
+    memset(&scan_files, 0, sizeof scan_files);
+    if (nearfield && !o.scan && !lv_scan_ensure(LUMIVIEW_REPO_ROOT, &scan_files)) return 1;
+    const char *scan_path = o.scan ? o.scan : scan_files.pack;
+    const char *proxy_path = o.proxy ? (strcmp(o.proxy, "none") == 0 ? NULL : o.proxy)
+                                     : (o.scan ? NULL : scan_files.proxy);
 
     int rc = 1;
     GLFWwindow *win = NULL;
     lumi_context *ctx = NULL;
-    lumi_luminaire lum = 0;
-    lumi_instance inst = 0;
+    lumi_luminaire lum = 0, nf_lum = 0;
+    lumi_instance inst = 0, nf_inst = 0;
     lumi_target target = 0;
     float *lut = NULL;
+    float nf_model[16];
+    scene_nearfield_model(nf_model);
+    bool nf_has_proxy = false;
     scene sc;
     memset(&sc, 0, sizeof sc);
     gl_imported color, depth;
@@ -376,7 +442,28 @@ int main(int argc, char **argv) {
            info.opening_size_m[2], LUMINAIRE_X, LUMINAIRE_Y, LUMINAIRE_Z);
     lut = fetch_lut(ctx, lum);
     if (!lut) goto done;
-    if (!scene_create(&sc, model, &info, lut, LUT_W, LUT_H, o.occluder, o.indirect)) goto done;
+    if (nearfield) {
+        lumi_luminaire_desc nd = lumi_luminaire_desc_default();
+        nd.proxy_path = proxy_path;
+        if (!lv_lumi_ok(lumi_luminaire_load_ex(ctx, scan_path, &nd, &nf_lum), "lumi_luminaire_load_ex (scan)"))
+            goto done;
+        lumi_luminaire_info ni;
+        if (!lv_lumi_ok(lumi_luminaire_get_info(ctx, nf_lum, &ni), "lumi_luminaire_get_info (scan)")) goto done;
+        if (ni.kind != LUMI_LUMINAIRE_NEARFIELD) {
+            fprintf(stderr, "glfw_host: --scan %s is not a near-field scan (a photometric file?)\n", scan_path);
+            goto done;
+        }
+        nf_has_proxy = ni.has_proxy;
+        if (!lv_lumi_ok(lumi_instance_create(ctx, nf_lum, nf_model, &nf_inst), "lumi_instance_create (scan)") ||
+            !lv_lumi_ok(lumi_instance_set_nearfield(ctx, nf_inst, o.nf_mode, o.nf_proxy), "lumi_instance_set_nearfield"))
+            goto done;
+        printf("near-field luminaire %s: %u cameras, capture sphere r = %.3f m, proxy %s, %.1f MiB on the GPU; at "
+               "(%.2f, %.2f, %.2f) on a stand, facing yaw %.0f°; selection %s, proxy %s (keys 1/2/3, P)\n",
+               scan_path, ni.camera_count, ni.capture_radius_m, ni.has_proxy ? proxy_path : "none",
+               ni.gpu_bytes / 1048576.0, NEARFIELD_X, NEARFIELD_Y, NEARFIELD_Z, NEARFIELD_YAW_DEG,
+               lv_selection_name(o.nf_mode), o.nf_proxy ? (ni.has_proxy ? "on" : "on (but none loaded)") : "off");
+    }
+    if (!scene_create(&sc, model, &info, lut, LUT_W, LUT_H, o.occluder, o.indirect, nearfield)) goto done;
     free(lut);
     lut = NULL;
 
@@ -398,6 +485,8 @@ int main(int argc, char **argv) {
     memset(&a, 0, sizeof a);
     a.exposure = o.exposure;
     a.overlays = o.overlays;
+    a.nf_mode = o.nf_mode;
+    a.nf_proxy = o.nf_proxy;
     a.target = o.has_target ? o.target : lv_vec3_make(0.0, 1.3, 0.0);
     lv_vec3 eye0 = o.has_camera ? o.camera : lv_vec3_make(-1.9, 1.6, 2.1);
     if (!in_room(eye0) || !in_room(a.target)) {
@@ -439,7 +528,19 @@ int main(int argc, char **argv) {
         }
         lv_mat4_perspective_gl(fv.projection, FOVY_DEG, (double)fb_w / fb_h, NEAR_M, FAR_M);
 
-        /* 1. lumiview renders the luminaire with the host's camera (returns after the GPU is done). */
+        if (a.nf_dirty) {
+            a.nf_dirty = false;
+            if (nf_inst) {
+                if (!lv_lumi_ok(lumi_instance_set_nearfield(ctx, nf_inst, a.nf_mode, a.nf_proxy),
+                                "lumi_instance_set_nearfield")) {
+                    failed = true;
+                    break;
+                }
+                printf("near-field: selection %s, proxy %s\n", lv_selection_name(a.nf_mode),
+                       a.nf_proxy ? (nf_has_proxy ? "on" : "on (none loaded)") : "off");
+            }
+        }
+        /* 1. lumiview renders the luminaires with the host's camera (returns after the GPU is done). */
         lumi_camera cam = lumi_camera_default();
         memcpy(cam.view, fv.view, sizeof cam.view);
         memcpy(cam.projection, fv.projection, sizeof cam.projection);
@@ -472,6 +573,10 @@ int main(int argc, char **argv) {
             if (o.check_pixel &&
                 !check_luminaire_pixel(&sc, ctx, lum, inst, &color, &depth, &fv, o.check_x, o.check_y))
                 failed = true;
+            if (o.check_nearfield &&
+                !check_nearfield_pixel(&sc, &color, &depth, &fv, nf_model, a.nf_proxy && nf_has_proxy,
+                                       lv_selection_name(a.nf_mode)))
+                failed = true;
             if (o.screenshot && !write_screenshot(o.screenshot, fb_w, fb_h)) failed = true;
             for (int i = 0; i < o.probe_count; i++)
                 if (!check_probe(&sc, ctx, inst, o.probes[i])) failed = true;
@@ -481,9 +586,11 @@ int main(int argc, char **argv) {
         glfwSwapBuffers(win);
         glfwPollEvents();
         if (!o.frames) {
-            char title[128];
-            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd%s%s", a.exposure,
-                     a.overlays & LUMI_OVERLAY_SOLID ? " [solid]" : "", a.overlays & LUMI_OVERLAY_HOUSING ? " [housing]" : "");
+            char title[192];
+            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd%s%s%s%s%s", a.exposure,
+                     a.overlays & LUMI_OVERLAY_SOLID ? " [solid]" : "", a.overlays & LUMI_OVERLAY_HOUSING ? " [housing]" : "",
+                     nf_inst ? " - near-field: " : "", nf_inst ? lv_selection_name(a.nf_mode) : "",
+                     nf_inst ? (a.nf_proxy && nf_has_proxy ? " + proxy (1/2/3, P)" : ", no proxy (1/2/3, P)") : "");
             glfwSetWindowTitle(win, title);
         }
     }
@@ -517,6 +624,8 @@ done:
         if (target && !lv_lumi_ok(lumi_target_destroy(ctx, target), "lumi_target_destroy")) rc = 1;
         if (inst && !lv_lumi_ok(lumi_instance_destroy(ctx, inst), "lumi_instance_destroy")) rc = 1;
         if (lum && !lv_lumi_ok(lumi_luminaire_destroy(ctx, lum), "lumi_luminaire_destroy")) rc = 1;
+        if (nf_inst && !lv_lumi_ok(lumi_instance_destroy(ctx, nf_inst), "lumi_instance_destroy (scan)")) rc = 1;
+        if (nf_lum && !lv_lumi_ok(lumi_luminaire_destroy(ctx, nf_lum), "lumi_luminaire_destroy (scan)")) rc = 1;
         lumi_context_destroy(ctx);
     }
     if (win) glfwDestroyWindow(win);

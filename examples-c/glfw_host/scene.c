@@ -246,7 +246,7 @@ static size_t box_vertices(const scene_box *b, float *out) {
     return n;
 }
 
-static void build_boxes(scene *s, const lumi_luminaire_info *info, bool occluder) {
+static void build_boxes(scene *s, const lumi_luminaire_info *info, bool occluder, bool nearfield_stand) {
     const double h = ROOM_HALF_M, ceiling = ROOM_HEIGHT_M;
     const float rho = (float)ROOM_REFLECTANCE;
     add_box(s, lv_vec3_make(-h, 0, -h), lv_vec3_make(h, ceiling, h), rho, rho, rho, "room", true);
@@ -263,6 +263,16 @@ static void build_boxes(scene *s, const lumi_luminaire_info *info, bool occluder
      * 2.2,1.4,2.2 looking at the luminaire). */
     if (occluder)
         add_box(s, lv_vec3_make(0.8, 0, 0.8), lv_vec3_make(1.4, 2.2, 1.4), 0.55f, 0.42f, 0.30f, "cabinet", false);
+    /* The near-field luminaire's stand: a pole behind its panel (whose back plane is 50 mm behind the
+     * front tiles, and which spans ±0.1 m around its centre) from the floor to its centre, on a base. */
+    if (nearfield_stand) {
+        double yaw = NEARFIELD_YAW_DEG * LV_PI_DEG;
+        double px = NEARFIELD_X - 0.09 * sin(yaw), pz = NEARFIELD_Z - 0.09 * cos(yaw);
+        add_box(s, lv_vec3_make(px - 0.015, 0.02, pz - 0.015), lv_vec3_make(px + 0.015, NEARFIELD_Y, pz + 0.015),
+                0.25f, 0.25f, 0.27f, "stand", false);
+        add_box(s, lv_vec3_make(px - 0.15, 0, pz - 0.15), lv_vec3_make(px + 0.15, 0.02, pz + 0.15), 0.25f, 0.25f,
+                0.27f, "stand base", false);
+    }
     /* The luminaire's housing just above its opening (z = 0 in its frame), and two suspension rods. */
     double l = info->opening_size_m[0], w = info->opening_size_m[1], hh = 0.05;
     if (info->housing_size_m[0] > 0 && info->housing_size_m[1] > 0 && info->housing_size_m[2] > 0) {
@@ -297,8 +307,22 @@ void scene_luminaire_model(float m[16]) {
     m[15] = 1.0f;
 }
 
+void scene_nearfield_model(float m[16]) {
+    double yaw = NEARFIELD_YAW_DEG * LV_PI_DEG, fx = sin(yaw), fz = cos(yaw); /* nadir → world (fx, 0, fz) */
+    memset(m, 0, 16 * sizeof(float));
+    m[1] = 1.0f;         /* frame +X → world up */
+    m[4] = (float)fz;    /* frame +Y → world (fz, 0, −fx) = (−Z) × (+X), right-handed */
+    m[6] = (float)-fx;
+    m[8] = (float)-fx;   /* frame +Z → world −f: the nadir faces f */
+    m[10] = (float)-fz;
+    m[12] = (float)NEARFIELD_X;
+    m[13] = (float)NEARFIELD_Y;
+    m[14] = (float)NEARFIELD_Z;
+    m[15] = 1.0f;
+}
+
 bool scene_create(scene *s, const float model[16], const lumi_luminaire_info *info, const float *lut,
-                  uint32_t lut_w, uint32_t lut_h, bool occluder, bool indirect) {
+                  uint32_t lut_w, uint32_t lut_h, bool occluder, bool indirect, bool nearfield_stand) {
     memset(s, 0, sizeof *s);
     memcpy(s->model, model, sizeof s->model);
     float inv[16];
@@ -313,7 +337,7 @@ bool scene_create(scene *s, const float model[16], const lumi_luminaire_info *in
     double area = 2.0 * (2 * ROOM_HALF_M) * (2 * ROOM_HALF_M) + 4.0 * (2 * ROOM_HALF_M) * ROOM_HEIGHT_M;
     s->indirect_lux = indirect ? info->flux_lm * ROOM_REFLECTANCE / (area * (1.0 - ROOM_REFLECTANCE)) : 0.0;
 
-    build_boxes(s, info, occluder);
+    build_boxes(s, info, occluder, nearfield_stand);
     size_t max_vertices = (size_t)s->box_count * 36;
     float *v = malloc(max_vertices * 9 * sizeof(float));
     if (!v) {

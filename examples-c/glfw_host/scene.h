@@ -17,6 +17,15 @@
 #define LUMINAIRE_X 0.0
 #define LUMINAIRE_Y 2.5
 #define LUMINAIRE_Z 0.0
+/* The near-field luminaire (the examples' bundled scan, lv_scan.h): its frame's origin (the centre of
+ * its front tiles) stands at (NEARFIELD_X, NEARFIELD_Y, NEARFIELD_Z) on a pole, its panel upright
+ * (frame +X = world up) and its nadir (frame −Z) facing the horizontal direction of yaw
+ * NEARFIELD_YAW_DEG (from world +Z towards +X): towards the west-south-west of the room, where the
+ * default orbit camera moves. It is drawn, not a light: the room is lit by the far-field luminaire. */
+#define NEARFIELD_X (-0.6)
+#define NEARFIELD_Y 1.45
+#define NEARFIELD_Z (-0.2)
+#define NEARFIELD_YAW_DEG (-72.0)
 /* Diffuse reflectance of the room's surfaces. */
 #define ROOM_REFLECTANCE 0.5
 #define SCENE_MAX_BOXES 16
@@ -52,12 +61,16 @@ typedef struct scene {
  * along world −Z. Column-major. */
 void scene_luminaire_model(float model[16]);
 
-/* Builds the room (with the cabinet when `occluder`), compiles the shaders and uploads the 2D
+/* The near-field luminaire's model matrix (see NEARFIELD_*). Column-major. */
+void scene_nearfield_model(float model[16]);
+
+/* Builds the room (with the cabinet when `occluder`, the near-field luminaire's stand when
+ * `nearfield_stand`), compiles the shaders and uploads the 2D
  * look-up table (`lut`: `lut_w` × `lut_h` absolute cd, row 0 = γ 0°). `indirect` adds a uniform
  * inter-reflected illuminance from the integrating-sphere formula E = Φ ρ / (A (1 − ρ)). Prints why
  * and returns false on failure (call scene_destroy either way). */
 bool scene_create(scene *s, const float model[16], const lumi_luminaire_info *info, const float *lut,
-                  uint32_t lut_w, uint32_t lut_h, bool occluder, bool indirect);
+                  uint32_t lut_w, uint32_t lut_h, bool occluder, bool indirect, bool nearfield_stand);
 void scene_destroy(scene *s);
 
 /* Draws the lit room into the bound framebuffer (depth test on, LESS). */
