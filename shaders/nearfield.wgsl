@@ -51,9 +51,9 @@ struct Lum {
     gap: vec4<f32>,
 };
 
-@group(0) @binding(0) var<uniform> draw: Draw;
+@group(0) @binding(0) var<storage, read> draw: Draw;
 
-@group(1) @binding(0) var<uniform> lum: Lum;
+@group(1) @binding(0) var<storage, read> lum: Lum;
 // Per camera 6 × vec4<u32>: position.xyz (f32 bits), width | right.xyz, height | down.xyz, fx |
 // forward.xyz, fy | cx, cy (f32 bits), table offset, unused | bbox x0, y0, w, h (tiles).
 @group(1) @binding(1) var<storage, read> cameras: array<vec4<u32>>;
@@ -78,8 +78,15 @@ struct Lum {
 const EMPTY: u32 = 0xFFFFFFFFu;
 const PI: f32 = 3.14159265358979;
 
+// Pool pages bound (1…8), fixed per pipeline: with one page (any pool up to 128 MiB) the page switch
+// below folds away, which matters on a software rasteriser that would run every case for every lane.
+override POOL_PAGES: u32 = 8u;
+
 fn pool_word(chunk: u32, word: u32) -> u32 {
     let per_page = lum.pool.y;
+    if (POOL_PAGES == 1u) {
+        return pool0[chunk * lum.pool.x + word];
+    }
     let page = chunk / per_page;
     let i = (chunk % per_page) * lum.pool.x + word;
     switch page {
@@ -125,42 +132,67 @@ fn camera(i: u32) -> Cam {
     return cam;
 }
 
+// A kept tile of a camera, found: its slot's chunk and first word, and its scale (> 0: fp16 values ×
+// scale; ≤ 0: f32 values). `found` is false outside the image, outside the tile box, for a tile with
+// no light, or (counted in `misses`) for a chunk that is not resident.
+struct Tile {
+    found: bool,
+    chunk: u32,
+    base: u32,
+    scale: f32,
+};
+
+fn find_tile(cam: Cam, tx: u32, ty: u32) -> Tile {
+    var out: Tile;
+    out.found = false;
+    if (tx < cam.bbox.x || ty < cam.bbox.y || tx - cam.bbox.x >= cam.bbox.z || ty - cam.bbox.y >= cam.bbox.w) {
+        return out;
+    }
+    let entry = cam.table + (ty - cam.bbox.y) * cam.bbox.z + (tx - cam.bbox.x);
+    let tchunk = chunk_map[entry / lum.pool.z];
+    if (tchunk == EMPTY) {
+        atomicAdd(&misses[0], 1u);
+        return out;
+    }
+    let slot = pool_word(tchunk, entry % lum.pool.z);
+    if (slot == EMPTY) {
+        return out;
+    }
+    let per = lum.lists_b.w;
+    let schunk = chunk_map[lum.lists_b.z + slot / per];
+    if (schunk == EMPTY) {
+        atomicAdd(&misses[0], 1u);
+        return out;
+    }
+    out.found = true;
+    out.chunk = schunk;
+    out.base = (slot % per) * lum.grid.w;
+    out.scale = bitcast<f32>(pool_word(schunk, out.base));
+    return out;
+}
+
+// Value (cd/m²) of pixel (ix, iy) inside a found tile (ix, iy < tile edge).
+fn tile_value(tile: Tile, ix: u32, iy: u32) -> f32 {
+    let k = iy * lum.grid.z + ix;
+    if (tile.scale > 0.0) {
+        let pair = unpack2x16float(pool_word(tile.chunk, tile.base + 1u + k / 2u));
+        return select(pair.x, pair.y, (k & 1u) == 1u) * tile.scale;
+    }
+    // An f32 tile: exact values running on into the next slot (resident in the same chunk).
+    return bitcast<f32>(pool_word(tile.chunk, tile.base + 1u + k));
+}
+
 // Stored luminance (cd/m²) of pixel (col, row) of a camera; 0 outside the image or where no tile is kept.
 fn texel(cam: Cam, col: i32, row: i32) -> f32 {
     if (col < 0 || row < 0 || u32(col) >= cam.size.x || u32(row) >= cam.size.y) {
         return 0.0;
     }
     let t = lum.grid.z;
-    let tx = u32(col) / t;
-    let ty = u32(row) / t;
-    if (tx < cam.bbox.x || ty < cam.bbox.y || tx - cam.bbox.x >= cam.bbox.z || ty - cam.bbox.y >= cam.bbox.w) {
+    let tile = find_tile(cam, u32(col) / t, u32(row) / t);
+    if (!tile.found) {
         return 0.0;
     }
-    let entry = cam.table + (ty - cam.bbox.y) * cam.bbox.z + (tx - cam.bbox.x);
-    let tchunk = chunk_map[entry / lum.pool.z];
-    if (tchunk == EMPTY) {
-        atomicAdd(&misses[0], 1u);
-        return 0.0;
-    }
-    let slot = pool_word(tchunk, entry % lum.pool.z);
-    if (slot == EMPTY) {
-        return 0.0;
-    }
-    let per = lum.lists_b.w;
-    let schunk = chunk_map[lum.lists_b.z + slot / per];
-    if (schunk == EMPTY) {
-        atomicAdd(&misses[0], 1u);
-        return 0.0;
-    }
-    let base = (slot % per) * lum.grid.w;
-    let header = bitcast<f32>(pool_word(schunk, base));
-    let k = (u32(row) % t) * t + u32(col) % t;
-    if (header > 0.0) {
-        let pair = unpack2x16float(pool_word(schunk, base + 1u + k / 2u));
-        return select(pair.x, pair.y, (k & 1u) == 1u) * header;
-    }
-    // An f32 tile: exact values running on into the next slot (resident in the same chunk).
-    return bitcast<f32>(pool_word(schunk, base + 1u + k));
+    return tile_value(tile, u32(col) % t, u32(row) % t);
 }
 
 // Bilinear luminance at pixel coordinates (x, y) (pixel centres at +0.5). With `lit_only` (proxy

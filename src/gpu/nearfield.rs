@@ -367,6 +367,9 @@ struct PipelineKey {
     color: ColorFormat,
     depth_copy: bool,
     reversed_z: bool,
+    /// The shader's `POOL_PAGES`: 1 for a pool in one page (the page switch folds away), else
+    /// [`MAX_POOL_PAGES`].
+    pool_pages: u32,
 }
 
 /// Pipelines and layouts of the near-field pass.
@@ -383,8 +386,8 @@ pub struct NearfieldPass {
 /// One prepared frame of the pass: draws whose uniforms are written.
 #[derive(Debug, Default)]
 pub struct NearfieldFrame {
-    draws: Vec<(usize, Arc<NearfieldLuminaire>, bool)>,
-    pipeline: Option<wgpu::RenderPipeline>,
+    /// Uniform slot, luminaire, proxy mode, pipeline.
+    draws: Vec<(usize, Arc<NearfieldLuminaire>, bool, wgpu::RenderPipeline)>,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -465,7 +468,7 @@ impl NearfieldPass {
                     binding: 0,
                     visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                     ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
+                        ty: wgpu::BufferBindingType::Storage { read_only: true },
                         has_dynamic_offset: true,
                         min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<DrawUniform>() as u64),
                     },
@@ -476,7 +479,7 @@ impl NearfieldPass {
                 binding: 0,
                 visibility: wgpu::ShaderStages::FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
                     has_dynamic_offset: false,
                     min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<LumUniform>() as u64),
                 },
@@ -615,7 +618,7 @@ impl NearfieldPass {
                 ctx,
                 "near-field luminaire",
                 bytemuck::bytes_of(&lum_uniform),
-                wgpu::BufferUsages::UNIFORM,
+                wgpu::BufferUsages::STORAGE,
             );
             let cam_buf = buffer_init(ctx, "camera records", bytemuck::cast_slice(&cams), storage);
             let tri_buf = buffer_init(ctx, "selection triangles", bytemuck::cast_slice(&g.triangles), storage);
@@ -816,7 +819,10 @@ impl NearfieldPass {
                     } else {
                         "fs_main_color_only"
                     }),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[("POOL_PAGES", f64::from(key.pool_pages))],
+                        ..Default::default()
+                    },
                     targets,
                 }),
                 multiview_mask: None,
@@ -892,7 +898,7 @@ impl NearfieldPass {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("near-field draws"),
                 size: cap,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
             let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -917,27 +923,29 @@ impl NearfieldPass {
         if let Some((buf, _, _)) = &self.uniforms {
             ctx.queue.write_buffer(buf, 0, &bytes);
         }
-        let pipeline = self.pipeline(
-            ctx,
-            PipelineKey {
-                color,
-                depth_copy: depth == DepthFormat::R32Float,
-                reversed_z: camera.reversed_z,
-            },
-        )?;
-        Ok(NearfieldFrame {
-            draws,
-            pipeline: Some(pipeline),
-        })
+        let mut with_pipelines = Vec::with_capacity(draws.len());
+        for (slot, lum, proxy) in draws {
+            let pipeline = self.pipeline(
+                ctx,
+                PipelineKey {
+                    color,
+                    depth_copy: depth == DepthFormat::R32Float,
+                    reversed_z: camera.reversed_z,
+                    pool_pages: if lum.pages.len() <= 1 { 1 } else { MAX_POOL_PAGES as u32 },
+                },
+            )?;
+            with_pipelines.push((slot, lum, proxy, pipeline));
+        }
+        Ok(NearfieldFrame { draws: with_pipelines })
     }
 
     /// Records a prepared frame's draws into the frame's render pass.
     pub fn draw(&self, frame: &NearfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
-        let (Some(pipeline), Some((_, _, ubind))) = (&frame.pipeline, &self.uniforms) else {
+        let Some((_, _, ubind)) = &self.uniforms else {
             return;
         };
-        pass.set_pipeline(pipeline);
-        for (slot, lum, proxy) in &frame.draws {
+        for (slot, lum, proxy, pipeline) in &frame.draws {
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
             pass.set_bind_group(1, &lum.bind, &[]);
             let (vb, n) = match (&lum.proxy, proxy) {
