@@ -9,7 +9,8 @@
 //    at Q sees P along exactly the eye's line.
 // 3. Cameras around u are selected (nearest, idw4 or continuous barycentric weights over the spherical
 //    Delaunay triangulation; `src/nearfield/select/` builds the tables and documents them).
-// 4. Each selected camera is sampled (bilinear over pixel centres; in proxy mode over the lit texels
+// 4. In proxy mode a camera whose path to P the proxy blocks is left out (BVH ray cast, see blend()).
+//    Each selected camera is sampled (bilinear over pixel centres; in proxy mode over the lit texels
 //    only, see sample_camera) where it sees the same point: the projection of P (proxy mode) or,
 //    without a proxy, the view direction v rotated into its frame (the "infinite-depth billboard").
 // 5. The blend (continuous: weighted geometric mean where every camera sees light, see shade())
@@ -45,9 +46,10 @@ struct Lum {
     // idw4 offsets, idw4 items, number of table chunks (slot-chunk maps follow them in chunk_map),
     // slots per slot chunk.
     lists_b: vec4<u32>,
-    // words per chunk, chunks per pool page, table entries per table chunk, unused.
+    // words per chunk, chunks per pool page, table entries per table chunk, first triangle word of
+    // `bvh` (0: no proxy BVH).
     pool: vec4<u32>,
-    // x = cos(max gap) for nearest/idw4, y, z, w unused.
+    // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z, w unused.
     gap: vec4<f32>,
 };
 
@@ -78,6 +80,8 @@ struct Lum {
 @group(1) @binding(12) var<storage, read> pool5: array<u32>;
 @group(1) @binding(13) var<storage, read> pool6: array<u32>;
 @group(1) @binding(14) var<storage, read> pool7: array<u32>;
+// The proxy's BVH (src/nearfield/bvh.rs): 2 words per node, then 3 per triangle from lum.pool.w.
+@group(1) @binding(15) var<storage, read> bvh: array<vec4<f32>>;
 
 const EMPTY: u32 = 0xFFFFFFFFu;
 const PI: f32 = 3.14159265358979;
@@ -228,8 +232,7 @@ fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
 }
 
 // Luminance seen by camera `ci` at surface point p (proxy mode) or along direction v (bounding mode).
-fn camera_luminance(ci: u32, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
-    let cam = camera(ci);
+fn camera_luminance(cam: Cam, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
     var x: vec3<f32>;
     if (proxy) {
         x = p - cam.pos;
@@ -371,6 +374,105 @@ fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
     return out;
 }
 
+// Is the segment from `origin` to `dest` blocked by the proxy (its BVH, src/nearfield/bvh.rs)? Parameters
+// within `lum.gap.y` (metres, over the segment's length) of either end do not count, so the surface
+// P lies on does not block itself.
+fn occluded(origin: vec3<f32>, dest: vec3<f32>) -> bool {
+    let toff = lum.pool.w;
+    if (toff == 0u) {
+        return false;
+    }
+    var d = dest - origin;
+    let len = length(d);
+    if (len <= 0.0) {
+        return false;
+    }
+    let eps = lum.gap.y / len;
+    // No zero components: the slab test divides by them.
+    d = select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
+    let inv = 1.0 / d;
+    var stack: array<u32, 33>;
+    stack[0] = 0u;
+    var sp = 1u;
+    loop {
+        if (sp == 0u) {
+            break;
+        }
+        sp = sp - 1u;
+        let n = stack[sp];
+        let a = bvh[2u * n];
+        let b = bvh[2u * n + 1u];
+        let t0 = (a.xyz - origin) * inv;
+        let t1 = (b.xyz - origin) * inv;
+        let lo = min(t0, t1);
+        let hi = max(t0, t1);
+        let tmin = max(max(max(lo.x, lo.y), lo.z), eps);
+        let tmax = min(min(min(hi.x, hi.y), hi.z), 1.0 - eps);
+        if (tmin > tmax) {
+            continue;
+        }
+        let first = bitcast<u32>(a.w);
+        let count = bitcast<u32>(b.w);
+        if (count > 0u) {
+            for (var j = first; j < first + count; j = j + 1u) {
+                let v0 = bvh[toff + 3u * j].xyz;
+                let e1 = bvh[toff + 3u * j + 1u].xyz;
+                let e2 = bvh[toff + 3u * j + 2u].xyz;
+                // Möller–Trumbore.
+                let pv = cross(d, e2);
+                let det = dot(e1, pv);
+                if (abs(det) < 1e-20) {
+                    continue;
+                }
+                let idet = 1.0 / det;
+                let sv = origin - v0;
+                let u = dot(sv, pv) * idet;
+                let q = cross(sv, e1);
+                let w = dot(d, q) * idet;
+                let t = dot(e2, q) * idet;
+                if (u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > eps && t < 1.0 - eps) {
+                    return true;
+                }
+            }
+        } else if (sp + 2u <= 33u) {
+            stack[sp] = first;
+            stack[sp + 1u] = first + 1u;
+            sp = sp + 2u;
+        }
+    }
+    return false;
+}
+
+struct Blend {
+    // Σ w·L, Σ w·ln L, Σ w over the voting cameras.
+    l: f32,
+    log_l: f32,
+    w: f32,
+    // Whether every voting camera saw light.
+    all_lit: bool,
+};
+
+fn blend(sel: Selected, p: vec3<f32>, v: vec3<f32>, proxy: bool, test_visibility: bool) -> Blend {
+    var out = Blend(0.0, 0.0, 0.0, true);
+    for (var i = 0u; i < 4u; i = i + 1u) {
+        if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
+            let cam = camera(sel.cam[i]);
+            if (test_visibility && occluded(p, cam.pos)) {
+                continue;
+            }
+            let li = camera_luminance(cam, p, v, proxy);
+            out.l = out.l + sel.w[i] * li;
+            out.w = out.w + sel.w[i];
+            if (li > 0.0) {
+                out.log_l = out.log_l + sel.w[i] * log(li);
+            } else {
+                out.all_lit = false;
+            }
+        }
+    }
+    return out;
+}
+
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local_pos: vec3<f32>,
@@ -436,28 +538,24 @@ fn shade(in: VsOut, front: bool) -> Shaded {
     }
     // The point on the line closest to the content centre (bounding mode samples along v only).
     let pc = p - bc * v;
-    // Continuous mode blends log luminance (a weighted geometric mean) when every selected camera
-    // sees light there: luminance varies with direction multiplicatively (cosⁿ lobes, highlights), and
-    // interpolating its logarithm across the camera spacing keeps the relative error small where a
-    // linear blend of a peaked distribution is off by many percent; for a diffuse surface both are
-    // exact. Where a camera sees no light (a silhouette), or in nearest/idw4 (the reference's
+    // Proxy mode: a camera whose straight path to P is blocked by the proxy sees something else there
+    // and does not vote; the others' weights are renormalised (all blocked: all vote, as without the
+    // test). Then continuous mode blends log luminance (a weighted geometric mean) when every voting
+    // camera sees light there: luminance varies with direction multiplicatively (cosⁿ lobes,
+    // highlights), and interpolating its logarithm across the camera spacing keeps the relative error
+    // small where a linear blend of a peaked distribution is off by many percent; for a diffuse surface
+    // both are exact. Where a camera sees no light (a silhouette), or in nearest/idw4 (the reference's
     // methods), the blend is linear.
-    var l = 0.0;
-    var log_l = 0.0;
-    var all_lit = true;
-    for (var i = 0u; i < 4u; i = i + 1u) {
-        if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
-            let li = camera_luminance(sel.cam[i], p, v, proxy);
-            l = l + sel.w[i] * li;
-            if (li > 0.0) {
-                log_l = log_l + sel.w[i] * log(li);
-            } else {
-                all_lit = false;
-            }
-        }
+    var bl = blend(sel, p, v, proxy, proxy);
+    if (bl.w <= 0.0 && proxy) {
+        bl = blend(sel, p, v, proxy, false);
     }
-    if (draw.flags.x == 2u && all_lit && l > 0.0) {
-        l = exp(log_l);
+    var l = 0.0;
+    if (bl.w > 0.0) {
+        l = bl.l / bl.w;
+        if (draw.flags.x == 2u && bl.all_lit && l > 0.0) {
+            l = exp(bl.log_l / bl.w);
+        }
     }
     out.l = l;
     if (proxy) {

@@ -101,6 +101,13 @@ fn lambertian_disc_and_rectangle_meet_the_contract() {
 }
 
 #[test]
+fn two_planes_meet_the_contract() {
+    // Parallax and occlusion between planes 50 mm apart: the proxy's visibility test decides.
+    // The 10 mm gaps ask for 1.67 mm pixels: 250 px captures.
+    run(&["two-planes"], "planes", 256);
+}
+
+#[test]
 fn star_panel_meets_the_contract() {
     // The star's 10 mm sectors ask for 1.67 mm pixels: 343 px captures.
     run(&["star-panel"], "star", 352);

@@ -19,6 +19,7 @@ use super::farfield::{OutputMode, RenderOptions};
 use super::residency::{ChunkLayout, Residency, CHUNK_BYTES, EMPTY};
 use super::target::{ColorFormat, DepthFormat};
 use super::GpuError;
+use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::pack::Pack;
 use crate::nearfield::select::{Selection, SelectionMode, SelectionOptions};
 
@@ -492,6 +493,7 @@ impl NearfieldPass {
             for b in 0..MAX_POOL_PAGES as u32 {
                 entries.push(storage_entry(7 + b, true));
             }
+            entries.push(storage_entry(15, true));
             let lum_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("near-field luminaire"),
                 entries: &entries,
@@ -602,14 +604,31 @@ impl NearfieldPass {
                     ));
                 }
             }
+            // The proxy's BVH for the visibility test: nodes, then triangles (src/nearfield/bvh.rs).
+            let bvh = proxy.as_deref().map(ProxyBvh::build).transpose()?;
+            let (bvh_words, tri_offset) = match &bvh {
+                Some(b) => {
+                    let mut w = b.nodes.clone();
+                    w.extend_from_slice(&b.triangles);
+                    (w, b.nodes.len() as u32)
+                }
+                None => (vec![[0.0f32; 4]], 0),
+            };
+            if (bvh_words.len() * 16) as u64 > max_binding {
+                return Err(GpuError::invalid(
+                    "proxy",
+                    format!("its BVH needs {} bytes, above the {max_binding}-byte binding limit", bvh_words.len() * 16),
+                ));
+            }
             let lum_uniform = LumUniform {
                 sphere: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, sphere.1 as f32],
                 content: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, content as f32],
                 grid: [g.n_phi, g.n_theta, layout.tile_size, layout.entry_bytes / 4],
                 lists_a: [tri_off, tri_items, n1_off, n1_items],
                 lists_b: [n4_off, n4_items, chunks.table_chunks, chunks.slots_per_chunk],
-                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, 0],
-                gap: [g.cos_max_gap, 0.0, 0.0, 0.0],
+                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, tri_offset],
+                // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm).
+                gap: [g.cos_max_gap, (1e-4 * content).max(1e-6) as f32, 0.0, 0.0],
             };
             let chunks_per_page = (max_binding / CHUNK_BYTES).max(1) as u32;
             let mut lum_uniform = lum_uniform;
@@ -648,7 +667,10 @@ impl NearfieldPass {
                     p.len() as u32,
                 )
             });
-            let fixed: u64 = [&ubuf, &cam_buf, &tri_buf, &vert_buf, &list_buf, &chunk_map, &misses, &bounds.0]
+            let bvh_buf = buffer_init(ctx, "proxy BVH", bytemuck::cast_slice(&bvh_words), storage);
+            let fixed: u64 = [
+                &ubuf, &cam_buf, &tri_buf, &vert_buf, &list_buf, &chunk_map, &misses, &bounds.0, &bvh_buf,
+            ]
                 .iter()
                 .map(|b| b.size())
                 .sum::<u64>()
@@ -725,6 +747,10 @@ impl NearfieldPass {
                     resource: pages.get(b).unwrap_or(&dummy).as_entire_binding(),
                 });
             }
+            entries.push(wgpu::BindGroupEntry {
+                binding: 15,
+                resource: bvh_buf.as_entire_binding(),
+            });
             let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("near-field luminaire"),
                 layout: &self.lum_layout,

@@ -2,6 +2,7 @@
 //! layouts and the tiled `.lvpack` store.
 
 pub mod binning;
+pub mod bvh;
 pub mod coverage;
 pub mod error;
 pub mod images;
