@@ -7,9 +7,10 @@
 //!
 //! A synthetic scan (`rigo` layout, N cameras per hemisphere, square captures) is packed (cached in
 //! `--work`), uploaded, and drawn from an eye 1.6 m away that frames the luminaire so it covers most
-//! of the frame. For each output size, in one process on one device: a trivial pass (a full-screen
-//! triangle writing a constant into a target of the same size and format, submitted and waited for
-//! like a frame) and a near-field frame in each mode (nearest, idw4 and continuous without proxy,
+//! of the frame. For each output size, in one process on one device: two trivial passes that write
+//! a constant into every pixel of a target of the same size and format, submitted and waited for like
+//! a frame (a render pass drawing one full-screen triangle, and a compute pass storing into a storage
+//! texture, the notes' baseline), and a near-field frame in each mode (nearest, idw4 and continuous without proxy,
 //! continuous with the proxy), each timed as the median of `--runs` (≥ 9) after one warm-up. Frame
 //! times include the submission, the image's queue-family barriers and the wait for the GPU: what a
 //! host pays per `lumi_render`. Prints one JSON object; ratios to the trivial pass are what to read
@@ -159,6 +160,83 @@ impl Trivial {
     }
 }
 
+/// A compute pass that writes a constant into every pixel of a storage texture of the frame's size:
+/// the "trivial pass" of the near-field notes (measured there at 7–13 ms at 640×360 on lavapipe).
+struct TrivialCompute {
+    pipeline: wgpu::ComputePipeline,
+    bind: wgpu::BindGroup,
+    size: (u32, u32),
+}
+
+const TRIVIAL_COMPUTE_WGSL: &str = r#"
+@group(0) @binding(0) var out: texture_storage_2d<rgba32float, write>;
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(out);
+    if (id.x < size.x && id.y < size.y) {
+        textureStore(out, vec2<i32>(id.xy), vec4<f32>(1000.0, 1000.0, 1000.0, 1.0));
+    }
+}
+"#;
+
+impl TrivialCompute {
+    fn new(device: &wgpu::Device, w: u32, h: u32) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trivial compute"),
+            source: wgpu::ShaderSource::Wgsl(TRIVIAL_COMPUTE_WGSL.into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("trivial compute"),
+            layout: None,
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let tex = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("trivial compute target"),
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::STORAGE_BINDING,
+            view_formats: &[],
+        });
+        let view = tex.create_view(&Default::default());
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trivial compute"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        });
+        TrivialCompute {
+            pipeline,
+            bind,
+            size: (w, h),
+        }
+    }
+
+    fn frame(&self, r: &Renderer) -> Res<()> {
+        let mut enc = r.ctx.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = enc.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.bind, &[]);
+            pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
+        }
+        r.ctx.queue.submit([enc.finish()]);
+        r.ctx.wait_idle()?;
+        Ok(())
+    }
+}
+
 fn median_ms(mut f: impl FnMut() -> Res<()>, runs: usize) -> Res<(f64, Vec<f64>)> {
     f()?; // warm-up: pipelines, residency, caches
     let mut t = Vec::with_capacity(runs);
@@ -271,6 +349,8 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         let plain_view = plain.create_view(&Default::default());
         // Interleave: trivial, each mode, trivial again — drift on a shared machine shows up as two
         // different trivial medians.
+        let trivial_compute = TrivialCompute::new(&r.ctx.device, w, h);
+        let (c0, _) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
         let (t0, t0_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
         let mut modes = Vec::new();
         for (label, mode, proxy) in [
@@ -300,6 +380,7 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         )?;
         inst = r.add_instance(id, Mat4::IDENTITY)?;
         let (t1, t1_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
+        let (c1, _) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
         // Coverage: how much of the frame the luminaire's proxy fills.
         r.set_nearfield_settings(inst, NearfieldSettings::default())?;
         r.render(&mut target, &hc, &RenderOptions::default())?;
@@ -311,6 +392,7 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         sizes.push(json!({
             "width": w, "height": h,
             "trivial_ms": [t0, t1], "trivial_runs_ms": [t0_runs, t1_runs],
+            "trivial_compute_ms": [c0, c1],
             "modes": modes,
             "empty_frame_ms": empty,
             "covered_fraction": covered as f64 / f64::from(w * h),

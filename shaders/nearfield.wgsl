@@ -90,6 +90,17 @@ const PI: f32 = 3.14159265358979;
 // below folds away, which matters on a software rasteriser that would run every case for every lane.
 override POOL_PAGES: u32 = 8u;
 
+// Set when the whole pack is resident with pack chunk c in pool chunk c: the chunk map is skipped.
+override IDENTITY_MAP: bool = false;
+
+// The pool chunk of pack chunk `c` (EMPTY: not resident).
+fn pool_chunk(c: u32) -> u32 {
+    if (IDENTITY_MAP) {
+        return c;
+    }
+    return chunk_map[c];
+}
+
 fn pool_word(chunk: u32, word: u32) -> u32 {
     let per_page = lum.pool.y;
     if (POOL_PAGES == 1u) {
@@ -157,7 +168,7 @@ fn find_tile(cam: Cam, tx: u32, ty: u32) -> Tile {
         return out;
     }
     let entry = cam.table + (ty - cam.bbox.y) * cam.bbox.z + (tx - cam.bbox.x);
-    let tchunk = chunk_map[entry / lum.pool.z];
+    let tchunk = pool_chunk(entry / lum.pool.z);
     if (tchunk == EMPTY) {
         atomicAdd(&misses[0], 1u);
         return out;
@@ -167,7 +178,7 @@ fn find_tile(cam: Cam, tx: u32, ty: u32) -> Tile {
         return out;
     }
     let per = lum.lists_b.w;
-    let schunk = chunk_map[lum.lists_b.z + slot / per];
+    let schunk = pool_chunk(lum.lists_b.z + slot / per);
     if (schunk == EMPTY) {
         atomicAdd(&misses[0], 1u);
         return out;

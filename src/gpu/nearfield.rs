@@ -113,6 +113,9 @@ pub struct NearfieldLuminaire {
     pub content_radius_m: f64,
     /// Whether the whole pack is resident (no streaming).
     pub fully_resident: bool,
+    /// Whether pack chunk c is pool chunk c (fully resident, every chunk in use): the shader skips
+    /// the chunk map.
+    identity_map: bool,
     chunks: ChunkLayout,
     residency: Mutex<Residency>,
     chunk_map: wgpu::Buffer,
@@ -371,6 +374,8 @@ struct PipelineKey {
     /// The shader's `POOL_PAGES`: 1 for a pool in one page (the page switch folds away), else
     /// [`MAX_POOL_PAGES`].
     pool_pages: u32,
+    /// The shader's `IDENTITY_MAP`.
+    identity_map: bool,
 }
 
 /// Pipelines and layouts of the near-field pass.
@@ -763,6 +768,7 @@ impl NearfieldPass {
                 sphere,
                 content_radius_m: content,
                 fully_resident: false,
+                identity_map: false,
                 residency: Mutex::new(Residency::new(chunks.chunk_count(), capacity)),
                 chunks,
                 chunk_map,
@@ -782,7 +788,17 @@ impl NearfieldPass {
                     ctx.queue.submit([]);
                 }
             }
-            Ok(NearfieldLuminaire { fully_resident, ..lum })
+            // Fully resident with every chunk id in use: pack chunk c sits in pool chunk c, and the
+            // shader may skip the chunk map (two of a texel's five dependent reads).
+            let identity_map = fully_resident && {
+                let r = lum.residency.lock().unwrap_or_else(|p| p.into_inner());
+                all.len() == r.map.len() && r.map.iter().enumerate().all(|(c, &g)| g as usize == c)
+            };
+            Ok(NearfieldLuminaire {
+                fully_resident,
+                identity_map,
+                ..lum
+            })
         })
     }
 
@@ -846,7 +862,10 @@ impl NearfieldPass {
                         "fs_main_color_only"
                     }),
                     compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &[("POOL_PAGES", f64::from(key.pool_pages))],
+                        constants: &[
+                            ("POOL_PAGES", f64::from(key.pool_pages)),
+                            ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
+                        ],
                         ..Default::default()
                     },
                     targets,
@@ -958,6 +977,7 @@ impl NearfieldPass {
                     depth_copy: depth == DepthFormat::R32Float,
                     reversed_z: camera.reversed_z,
                     pool_pages: if lum.pages.len() <= 1 { 1 } else { MAX_POOL_PAGES as u32 },
+                    identity_map: lum.identity_map,
                 },
             )?;
             with_pipelines.push((slot, lum, proxy, pipeline));
