@@ -43,6 +43,13 @@ fn check(rep: &LuminaireReport) {
         (&c.inside, "inside"),
         (&c.held_out, "held-out"),
     ] {
+        // Most views must be measurable (see "Pixel sets" in the contract).
+        assert!(
+            set.views >= 2 * set.unmeasured && set.views > 0,
+            "{name} {what}: {} views measured, {} unmeasured",
+            set.views,
+            set.unmeasured
+        );
         let l = set.log_rmse.unwrap_or_else(|| panic!("{name} {what}: log RMSE n/a"));
         assert!(l < 0.01, "{name} {what}: log RMSE {l}");
         let m = set.median_rel.unwrap_or_else(|| panic!("{name} {what}: median n/a"));
@@ -105,6 +112,11 @@ fn two_planes_meet_the_contract() {
     // Parallax and occlusion between planes 50 mm apart: the proxy's visibility test decides.
     // The 10 mm gaps ask for 1.67 mm pixels: 250 px captures.
     run(&["two-planes"], "planes", 256);
+}
+
+#[test]
+fn lambertian_cosine_disc_meets_the_contract() {
+    run(&["cos1"], "cos1", 128);
 }
 
 #[test]

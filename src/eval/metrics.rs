@@ -153,12 +153,15 @@ pub fn relative_change(a: &[f32], b: &[f32], mask: &[bool]) -> f64 {
 }
 
 /// Aggregate of a set of views (docs/quality-metrics.md): mean log RMSE, median of medians, largest
-/// p95, largest silhouette displacement, largest doubled-pattern score; `None` where any view lacks
-/// the metric. Views with a dark reference are left out.
+/// p95, largest silhouette displacement, largest doubled-pattern score over the measured views;
+/// `None` when no view could be measured. Views with a dark reference are left out; views without
+/// enough interior pixels are counted as unmeasured.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct SetMetrics {
-    /// Views measured (those whose reference has lit pixels).
+    /// Views measured: a lit reference with at least [`MIN_INTERIOR`] interior pixels.
     pub views: usize,
+    /// Views with a lit reference but too few interior pixels to measure.
+    pub unmeasured: usize,
     /// Mean of the views' log RMSE.
     pub log_rmse: Option<f64>,
     /// Median of the views' median relative errors.
@@ -178,7 +181,13 @@ pub fn aggregate(views: &[ViewMetrics]) -> SetMetrics {
     // A view whose reference is dark everywhere (e.g. cos¹⁰⁰ at γ 75°, 10⁻⁵⁴ of its peak) has nothing
     // to measure: it is left out, and `views` counts the views measured.
     let lit: Vec<ViewMetrics> = views.iter().filter(|m| m.lit > 0).copied().collect();
-    let views = &lit[..];
+    // Views with lit pixels but fewer than MIN_INTERIOR interior ones (a smooth but steep gradient, or
+    // features too thin at that angle) are counted as unmeasured; the pixel metrics aggregate the rest,
+    // and are n/a only when no view could be measured.
+    let unmeasured = lit.iter().filter(|m| m.log_rmse.is_none()).count();
+    let silhouette_px = lit.iter().map(|m| m.silhouette_px).fold(0.0, f64::max);
+    let measured: Vec<ViewMetrics> = lit.iter().filter(|m| m.log_rmse.is_some()).copied().collect();
+    let views = &measured[..];
     let all = |f: &dyn Fn(&ViewMetrics) -> Option<f64>| -> Option<Vec<f64>> { views.iter().map(f).collect() };
     let mean = |v: Vec<f64>| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
     let max = |v: Vec<f64>| v.into_iter().reduce(f64::max);
@@ -191,7 +200,8 @@ pub fn aggregate(views: &[ViewMetrics]) -> SetMetrics {
         }),
         p95_rel: all(&|m| m.p95_rel).and_then(max),
         all_lit_log_rmse: all(&|m| m.all_lit_log_rmse).and_then(mean),
-        silhouette_px: views.iter().map(|m| m.silhouette_px).fold(0.0, f64::max),
+        silhouette_px,
+        unmeasured,
         doubled: all(&|m| m.doubled).and_then(max),
     }
 }
@@ -284,13 +294,18 @@ mod tests {
         assert_eq!(s.silhouette_px, 0.5);
         assert_eq!(s.median_rel, Some(0.01));
         assert_eq!(s.views, 2);
-        // A view with a dark reference is left out; one lacking a metric makes the set n/a.
+        // A view with a dark reference is left out; one without interior pixels is counted as
+        // unmeasured, and only a set with no measured view is n/a.
         let dark = ViewMetrics::default();
         assert_eq!(aggregate(&[v[0], v[1], dark]), s);
         let no_interior = ViewMetrics {
             lit: 3,
+            silhouette_px: 0.9,
             ..Default::default()
         };
-        assert_eq!(aggregate(&[v[0], no_interior]).log_rmse, None);
+        let m = aggregate(&[v[0], v[1], no_interior]);
+        assert_eq!((m.views, m.unmeasured, m.log_rmse), (2, 1, s.log_rmse));
+        assert_eq!(m.silhouette_px, 0.9);
+        assert_eq!(aggregate(&[no_interior]).log_rmse, None);
     }
 }

@@ -741,12 +741,16 @@ pub fn format_table(reports: &[LuminaireReport]) -> String {
             ));
         }
         s.push_str(&format!(
-            "{:<11} ({} cameras, {}² px, {:.3} mm pitch, views {:.3} mm; quadrature flux error {:.3} %{})\n",
+            "{:<11} ({} cameras, {}² px, {:.3} mm pitch, views {:.3} mm; views measured outside/inside/held-out {}; quadrature flux error {:.3} %{})\n",
             "",
             rep.cameras,
             rep.capture_px,
             rep.pitch_mm,
             rep.view_pitch_mm,
+            rep.modes.first().map_or(String::from("-"), |m| {
+                let f = |s: &SetMetrics| format!("{}/{}", s.views, s.views + s.unmeasured);
+                format!("{} {} {}", f(&m.outside), f(&m.inside), f(&m.held_out))
+            }),
             rep.quadrature_flux_error * 100.0,
             if rep.notes.is_empty() {
                 String::new()
