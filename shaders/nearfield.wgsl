@@ -557,9 +557,15 @@ fn shade(in: VsOut, front: bool) -> Shaded {
     // small where a linear blend of a peaked distribution is off by many percent; for a diffuse surface
     // both are exact. Where a camera sees no light (a silhouette), or in nearest/idw4 (the reference's
     // methods), the blend is linear.
-    var bl = blend(sel, p, v, proxy, proxy);
-    if (bl.w <= 0.0 && proxy) {
-        bl = blend(sel, p, v, proxy, false);
+    // Constant arguments per branch, so each call site compiles without the code it does not use.
+    var bl: Blend;
+    if (proxy) {
+        bl = blend(sel, p, v, true, true);
+        if (bl.w <= 0.0) {
+            bl = blend(sel, p, v, true, false);
+        }
+    } else {
+        bl = blend(sel, p, v, false, false);
     }
     var l = 0.0;
     if (bl.w > 0.0) {

@@ -16,7 +16,7 @@ use glam::{DVec3, Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
-use super::residency::{ChunkLayout, Residency, CHUNK_BYTES, EMPTY};
+use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::target::{ColorFormat, DepthFormat};
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
@@ -224,16 +224,7 @@ impl NearfieldLuminaire {
         if uploads.is_empty() {
             return Ok(());
         }
-        for (g, c) in uploads {
-            let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
-            let page = (g / self.chunks_per_page) as usize;
-            let off = u64::from(g % self.chunks_per_page) * CHUNK_BYTES;
-            if !bytes.is_empty() {
-                ctx.queue.write_buffer(&self.pages[page], off, &bytes);
-            }
-        }
-        ctx.queue.write_buffer(&self.chunk_map, 0, bytemuck::cast_slice(&r.map));
-        Ok(())
+        self.upload(ctx, uploads, &r.map)
     }
 }
 
@@ -251,7 +242,7 @@ pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, 
     let cos_i = (1.0 - (rc / r).min(0.995).powi(2)).sqrt();
     let add = |q: DVec3, mark: &mut Vec<bool>| {
         let u = (q - s).normalize_or_zero();
-        mark_cap(&mut mark[..], n_phi, n_theta, u, step + 1e-4);
+        sel.for_each_cell_near(u, step + 1e-4, |c| mark[c] = true);
     };
     let e = eye.truncate().as_dvec3();
     let first_hit = |p: DVec3, v: DVec3| -> Option<DVec3> {
@@ -307,38 +298,6 @@ fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
     let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
     let x = a.cross(t).normalize();
     (x, a.cross(x))
-}
-
-/// Marks every (φ, θ) cell within `radius` of `u` (conservatively through the cap's φ/θ range).
-fn mark_cap(mark: &mut [bool], n_phi: u32, n_theta: u32, u: DVec3, radius: f64) {
-    use std::f64::consts::{PI, TAU};
-    let theta = u.z.clamp(-1.0, 1.0).acos();
-    let mut phi = u.y.atan2(u.x);
-    if phi < 0.0 {
-        phi += TAU;
-    }
-    let (np, nt) = (n_phi as i64, n_theta as i64);
-    let j0 = (((theta - radius) / PI * nt as f64).floor() as i64).clamp(0, nt - 1);
-    let j1 = (((theta + radius) / PI * nt as f64).floor() as i64).clamp(0, nt - 1);
-    let all_phi = theta - radius <= 0.0 || theta + radius >= PI;
-    let (i0, i1) = if all_phi {
-        (0, np - 1)
-    } else {
-        let dphi = (radius.sin() / theta.sin()).min(1.0).asin() + 1e-9;
-        let a = ((phi - dphi) / TAU * np as f64).floor() as i64;
-        let b = ((phi + dphi) / TAU * np as f64).floor() as i64;
-        if b - a + 1 >= np {
-            (0, np - 1)
-        } else {
-            (a, b)
-        }
-    };
-    for j in j0..=j1 {
-        for i in i0..=i1 {
-            let ii = i.rem_euclid(np);
-            mark[(j * np + ii) as usize] = true;
-        }
-    }
 }
 
 /// Uniform block of one luminaire (matches `Lum` in shaders/nearfield.wgsl).
@@ -1005,6 +964,20 @@ impl NearfieldPass {
 }
 
 impl NearfieldLuminaire {
+    /// Writes the uploaded chunks into their pool pages and the new chunk map.
+    fn upload(&self, ctx: &GpuContext, uploads: Uploads, map: &[u32]) -> Result<(), GpuError> {
+        for (g, c) in uploads {
+            let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
+            let page = (g / self.chunks_per_page) as usize;
+            let off = u64::from(g % self.chunks_per_page) * CHUNK_BYTES;
+            if !bytes.is_empty() {
+                ctx.queue.write_buffer(&self.pages[page], off, &bytes);
+            }
+        }
+        ctx.queue.write_buffer(&self.chunk_map, 0, bytemuck::cast_slice(map));
+        Ok(())
+    }
+
     fn make_resident_chunks(&self, ctx: &GpuContext, chunks: &[u32]) -> Result<(), GpuError> {
         let mut r = self.residency.lock().unwrap_or_else(|p| p.into_inner());
         // Keep what earlier batches uploaded: stamp them as needed too.
@@ -1021,15 +994,6 @@ impl NearfieldLuminaire {
         let uploads = r
             .make_resident(&needed)
             .map_err(|m| GpuError::invalid("budget_bytes", m))?;
-        for (g, c) in uploads {
-            let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
-            let page = (g / self.chunks_per_page) as usize;
-            let off = u64::from(g % self.chunks_per_page) * CHUNK_BYTES;
-            if !bytes.is_empty() {
-                ctx.queue.write_buffer(&self.pages[page], off, &bytes);
-            }
-        }
-        ctx.queue.write_buffer(&self.chunk_map, 0, bytemuck::cast_slice(&r.map));
-        Ok(())
+        self.upload(ctx, uploads, &r.map)
     }
 }

@@ -524,6 +524,12 @@ impl Selection {
         self.grid.cell_of(u)
     }
 
+    /// Calls `f` with every grid cell that may hold a point within `r` radians of the unit vector `u`
+    /// (a superset; see the module docs' grid).
+    pub fn for_each_cell_near(&self, u: DVec3, r: f64, f: impl FnMut(usize)) {
+        self.grid.for_each_cell_near(u, r, f);
+    }
+
     /// Grid size (n_phi, n_theta).
     pub fn grid(&self) -> (u32, u32) {
         (self.grid.n_phi, self.grid.n_theta)
