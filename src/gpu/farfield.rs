@@ -10,6 +10,7 @@ use glam::{Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::meshes;
+use super::slots::{DrawSlots, SLOT};
 use super::target::{ColorFormat, DepthFormat, RenderTarget};
 use super::GpuError;
 use crate::photometry::Photometry;
@@ -153,7 +154,6 @@ pub struct InstanceUniform {
 }
 
 /// Size of one uniform slot (dynamic offsets must be 256-byte aligned).
-const SLOT: u64 = 256;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
@@ -171,7 +171,7 @@ pub struct FarfieldPass {
     table_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
-    uniforms: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+    uniforms: DrawSlots,
 }
 
 /// The far-field shader source.
@@ -222,7 +222,7 @@ impl FarfieldPass {
                 table_layout,
                 pipeline_layout,
                 pipelines: HashMap::new(),
-                uniforms: None,
+                uniforms: DrawSlots::new("far-field instances", wgpu::BufferUsages::UNIFORM),
             })
         })
     }
@@ -428,34 +428,6 @@ impl FarfieldPass {
         if draws.is_empty() {
             return Ok(FarfieldFrame::default());
         }
-        let needed = (slots.len().max(1) as u64) * SLOT;
-        if self.uniforms.as_ref().is_none_or(|(_, cap, _)| *cap < needed) {
-            let cap = needed.next_power_of_two();
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("far-field instances"),
-                size: cap,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("far-field instances"),
-                layout: &self.instance_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &buf,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<InstanceUniform>() as u64),
-                    }),
-                }],
-            });
-            self.uniforms = Some((buf, cap, bind));
-        }
-        let mut bytes = vec![0u8; slots.len() * SLOT as usize];
-        for (k, s) in slots.iter().enumerate() {
-            let b = bytemuck::bytes_of(s);
-            bytes[k * SLOT as usize..k * SLOT as usize + b.len()].copy_from_slice(b);
-        }
         let key = |lines| PipelineKey {
             color: target.desc.color,
             depth_copy: target.desc.depth == DepthFormat::R32Float,
@@ -464,10 +436,7 @@ impl FarfieldPass {
         };
         let tri_pipeline = self.pipeline(ctx, key(false))?;
         let line_pipeline = self.pipeline(ctx, key(true))?;
-        let Some((ubuf, _, ubind)) = self.uniforms.as_ref() else {
-            return Err(GpuError::invalid("uniforms", "uniform buffer missing"));
-        };
-        ctx.queue.write_buffer(ubuf, 0, &bytes);
+        let ubind = self.uniforms.write(ctx, &self.instance_layout, &slots);
         Ok(FarfieldFrame {
             draws,
             pipelines: Some((tri_pipeline, line_pipeline, ubind.clone())),

@@ -6,6 +6,7 @@
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`meshes`]: CPU geometry of openings, solids and housings.
 //! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles.
+//! - [`slots`]: per-draw records at dynamic offsets.
 //! - [`renderer`]: luminaires, instances and frames: what the C API drives.
 
 pub mod camera;
@@ -15,6 +16,7 @@ pub mod meshes;
 pub mod nearfield;
 pub mod renderer;
 pub mod residency;
+pub mod slots;
 pub mod target;
 
 pub use camera::{DepthRange, HostCamera, Origin};

@@ -17,6 +17,7 @@ use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
+use super::slots::{DrawSlots, SLOT};
 use super::target::{ColorFormat, DepthFormat};
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
@@ -323,8 +324,6 @@ struct DrawUniform {
     flags: [u32; 4],
 }
 
-const SLOT: u64 = 256;
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
     color: ColorFormat,
@@ -345,7 +344,7 @@ pub struct NearfieldPass {
     lum_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
-    uniforms: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+    uniforms: DrawSlots,
 }
 
 /// One prepared frame of the pass: draws whose uniforms are written.
@@ -473,7 +472,7 @@ impl NearfieldPass {
                 lum_layout,
                 pipeline_layout,
                 pipelines: HashMap::new(),
-                uniforms: None,
+                uniforms: DrawSlots::new("near-field draws", wgpu::BufferUsages::STORAGE),
             })
         })
     }
@@ -896,37 +895,7 @@ impl NearfieldPass {
             cams.dedup();
             lum.make_resident(ctx, &cams)?;
         }
-        let needed = (slots.len() as u64) * SLOT;
-        if self.uniforms.as_ref().is_none_or(|(_, cap, _)| *cap < needed) {
-            let cap = needed.next_power_of_two();
-            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("near-field draws"),
-                size: cap,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("near-field draws"),
-                layout: &self.draw_layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &buf,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(std::mem::size_of::<DrawUniform>() as u64),
-                    }),
-                }],
-            });
-            self.uniforms = Some((buf, cap, bind));
-        }
-        let mut bytes = vec![0u8; slots.len() * SLOT as usize];
-        for (k, s) in slots.iter().enumerate() {
-            let b = bytemuck::bytes_of(s);
-            bytes[k * SLOT as usize..k * SLOT as usize + b.len()].copy_from_slice(b);
-        }
-        if let Some((buf, _, _)) = &self.uniforms {
-            ctx.queue.write_buffer(buf, 0, &bytes);
-        }
+        self.uniforms.write(ctx, &self.draw_layout, &slots);
         let mut with_pipelines = Vec::with_capacity(draws.len());
         for (slot, lum, proxy) in draws {
             let pipeline = self.pipeline(
@@ -946,7 +915,7 @@ impl NearfieldPass {
 
     /// Records a prepared frame's draws into the frame's render pass.
     pub fn draw(&self, frame: &NearfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
-        let Some((_, _, ubind)) = &self.uniforms else {
+        let Some(ubind) = self.uniforms.bind_group() else {
             return;
         };
         for (slot, lum, proxy, pipeline) in &frame.draws {
