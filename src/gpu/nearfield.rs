@@ -312,6 +312,7 @@ struct LumUniform {
     lists_b: [u32; 4],
     pool: [u32; 4],
     gap: [f32; 4],
+    bvh: [u32; 4],
 }
 
 /// Uniform block of one draw (matches `Draw` in shaders/nearfield.wgsl).
@@ -456,7 +457,7 @@ impl NearfieldPass {
             for b in 0..MAX_POOL_PAGES as u32 {
                 entries.push(storage_entry(7 + b, true));
             }
-            entries.push(storage_entry(15, true));
+
             let lum_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("near-field luminaire"),
                 entries: &entries,
@@ -555,9 +556,24 @@ impl NearfieldPass {
             let n4_off = base(&g.near4_offsets, &mut lists);
             let n4_items = base(&g.near4_items, &mut lists);
             let max_binding = ctx.device.limits().max_storage_buffer_binding_size.min(MAX_PAGE_BYTES);
+            // The proxy's BVH for the visibility test (src/nearfield/bvh.rs): nodes, then triangles,
+            // after the selection triangles in the same buffer (one binding fewer: lavapipe runs the
+            // pass ~1.5× slower with a 17th storage buffer in the fragment stage).
+            let bvh = proxy.as_deref().map(ProxyBvh::build).transpose()?;
+            let mut geometry = g.triangles.clone();
+            let bvh_bases = match &bvh {
+                Some(b) => {
+                    let nodes = geometry.len() as u32;
+                    geometry.extend_from_slice(&b.nodes);
+                    let tris = geometry.len() as u32;
+                    geometry.extend_from_slice(&b.triangles);
+                    [nodes, tris, 1, 0]
+                }
+                None => [0; 4],
+            };
             for (what, bytes) in [
                 ("camera records", cams.len() * 16),
-                ("selection triangles", g.triangles.len() * 16),
+                ("selection triangles and proxy BVH", geometry.len() * 16),
                 ("selection lists", lists.len() * 4),
             ] {
                 if bytes as u64 > max_binding {
@@ -567,29 +583,14 @@ impl NearfieldPass {
                     ));
                 }
             }
-            // The proxy's BVH for the visibility test: nodes, then triangles (src/nearfield/bvh.rs).
-            let bvh = proxy.as_deref().map(ProxyBvh::build).transpose()?;
-            let (bvh_words, tri_offset) = match &bvh {
-                Some(b) => {
-                    let mut w = b.nodes.clone();
-                    w.extend_from_slice(&b.triangles);
-                    (w, b.nodes.len() as u32)
-                }
-                None => (vec![[0.0f32; 4]], 0),
-            };
-            if (bvh_words.len() * 16) as u64 > max_binding {
-                return Err(GpuError::invalid(
-                    "proxy",
-                    format!("its BVH needs {} bytes, above the {max_binding}-byte binding limit", bvh_words.len() * 16),
-                ));
-            }
             let lum_uniform = LumUniform {
                 sphere: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, sphere.1 as f32],
                 content: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, content as f32],
                 grid: [g.n_phi, g.n_theta, layout.tile_size, layout.entry_bytes / 4],
                 lists_a: [tri_off, tri_items, n1_off, n1_items],
                 lists_b: [n4_off, n4_items, chunks.table_chunks, chunks.slots_per_chunk],
-                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, tri_offset],
+                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, 0],
+                bvh: bvh_bases,
                 // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm).
                 gap: [g.cos_max_gap, (1e-4 * content).max(1e-6) as f32, 0.0, 0.0],
             };
@@ -603,7 +604,12 @@ impl NearfieldPass {
                 wgpu::BufferUsages::STORAGE,
             );
             let cam_buf = buffer_init(ctx, "camera records", bytemuck::cast_slice(&cams), storage);
-            let tri_buf = buffer_init(ctx, "selection triangles", bytemuck::cast_slice(&g.triangles), storage);
+            let tri_buf = buffer_init(
+                ctx,
+                "selection triangles and proxy BVH",
+                bytemuck::cast_slice(&geometry),
+                storage,
+            );
             let vert_buf = buffer_init(ctx, "selection vertices", bytemuck::cast_slice(&g.vertices), storage);
             let list_buf = buffer_init(ctx, "selection lists", bytemuck::cast_slice(&lists), storage);
             let map_len = chunks.chunk_count() as usize;
@@ -630,9 +636,8 @@ impl NearfieldPass {
                     p.len() as u32,
                 )
             });
-            let bvh_buf = buffer_init(ctx, "proxy BVH", bytemuck::cast_slice(&bvh_words), storage);
             let fixed: u64 = [
-                &ubuf, &cam_buf, &tri_buf, &vert_buf, &list_buf, &chunk_map, &misses, &bounds.0, &bvh_buf,
+                &ubuf, &cam_buf, &tri_buf, &vert_buf, &list_buf, &chunk_map, &misses, &bounds.0,
             ]
                 .iter()
                 .map(|b| b.size())
@@ -710,10 +715,7 @@ impl NearfieldPass {
                     resource: pages.get(b).unwrap_or(&dummy).as_entire_binding(),
                 });
             }
-            entries.push(wgpu::BindGroupEntry {
-                binding: 15,
-                resource: bvh_buf.as_entire_binding(),
-            });
+
             let bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("near-field luminaire"),
                 layout: &self.lum_layout,

@@ -75,7 +75,7 @@ pub fn list_adapters(instance: &wgpu::Instance) -> Vec<(wgpu::Adapter, [u8; 16])
 }
 
 /// Storage buffers per shader stage the passes need.
-pub const NEEDED_STORAGE_BUFFERS: u32 = 17;
+pub const NEEDED_STORAGE_BUFFERS: u32 = 16;
 
 /// Opens a device: the adapter whose device UUID equals `preferred_uuid` (an error if none does),
 /// else the first discrete GPU, integrated GPU, other, then CPU adapter. Requests
@@ -125,8 +125,8 @@ pub fn open_device(instance: &wgpu::Instance, preferred_uuid: Option<[u8; 16]>) 
     }
     let external_semaphore = adapter_has_extension(&adapter, ash::khr::external_semaphore_fd::NAME);
     let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits());
-    // The near-field pass binds 17 storage buffers in its fragment stage (draw and luminaire records,
-    // cameras, selection tables, chunk map, counter, 8 pool pages of ≤ 128 MiB, proxy BVH); lavapipe
+    // The near-field pass binds 16 storage buffers in its fragment stage (draw and luminaire records,
+    // cameras, selection tables and proxy BVH, chunk map, counter, 8 pool pages of ≤ 128 MiB); lavapipe
     // allows 32, real GPUs more.
     let have = adapter.limits();
     if have.max_storage_buffers_per_shader_stage < NEEDED_STORAGE_BUFFERS {
