@@ -57,19 +57,14 @@ enum FileKind {
     Pack,
 }
 
-/// Detects the kind of a file by its magic bytes (TM-25: "TM25"; .lvpack: "LVPACK"), else photometry.
+/// Detects the kind of a file by its first bytes (`nearfield::scanfile`: "TM25", "LVPACK"), else
+/// photometry (whose reader reports an unreadable file).
 fn detect_kind(file: &Path) -> FileKind {
-    use std::io::Read as _;
-    let mut magic = [0u8; 8];
-    let n = std::fs::File::open(file)
-        .and_then(|mut f| f.read(&mut magic))
-        .unwrap_or(0);
-    if n >= 4 && &magic[..4] == b"TM25" {
-        FileKind::RayFile
-    } else if n >= 6 && &magic[..6] == b"LVPACK" {
-        FileKind::Pack
-    } else {
-        FileKind::Photometry
+    use lumiview::nearfield::scanfile::{detect, ScanFileKind};
+    match detect(file) {
+        Ok(Some(ScanFileKind::RayFile)) => FileKind::RayFile,
+        Ok(Some(ScanFileKind::Pack)) => FileKind::Pack,
+        _ => FileKind::Photometry,
     }
 }
 

@@ -8,6 +8,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use lumiview::nearfield::binning::{bin_rays, BinningOptions};
 use lumiview::nearfield::manifest::{load_scan, ImportOptions};
 use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackStats, Threshold, MAX_PAGE_BYTES};
+use lumiview::nearfield::scanfile::{self, ScanFileKind};
 use lumiview::nearfield::synth::{synth_scan, SynthOptions};
 use lumiview::nearfield::tm25::RayFile;
 use lumiview::nearfield::{CaptureSphere, Hemisphere, Scan};
@@ -61,15 +62,6 @@ pub struct PackArgs {
     pub json: bool,
 }
 
-/// Reads the first bytes of a file to tell a pack or ray file from anything else.
-fn magic(file: &Path) -> Result<[u8; 8], String> {
-    use std::io::Read as _;
-    let mut m = [0u8; 8];
-    let mut f = std::fs::File::open(file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let _ = f.read(&mut m).map_err(|e| format!("{}: {e}", file.display()))?;
-    Ok(m)
-}
-
 /// The scan the arguments describe, with a description for the metadata.
 fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Error>> {
     if let Some(name) = &args.synth {
@@ -99,9 +91,8 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
     let Some(file) = args.input.first() else {
         return Err("nothing to pack: give a scan manifest, a ray file, an .lvpack or --synth LUMINAIRE".into());
     };
-    let m = magic(file)?;
-    let binary = m.starts_with(b"LVPACK") || m.starts_with(b"TM25");
-    if !binary {
+    let kind = scanfile::detect(file)?;
+    if !matches!(kind, Some(ScanFileKind::Pack | ScanFileKind::RayFile)) {
         let opts = ImportOptions {
             skip_bad: args.skip_bad_images,
             verify_pixels: false,
@@ -113,7 +104,7 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
     if args.input.len() > 1 {
         return Err("several inputs are only allowed for scan manifests (one per hemisphere)".into());
     }
-    if m.starts_with(b"LVPACK") {
+    if kind == Some(ScanFileKind::Pack) {
         let pack = Pack::open(file)?;
         let desc = format!("repacked from {} ({})", file.display(), pack.metadata().source);
         return Ok((pack.into_scan(), desc));
