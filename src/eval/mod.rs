@@ -13,9 +13,7 @@ use std::sync::Arc;
 use glam::{DVec2, DVec3, Mat4};
 
 use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
-use crate::gpu::{
-    Attachment, ColorFormat, DepthFormat, GpuError, HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc,
-};
+use crate::gpu::{GpuError, HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc};
 use crate::nearfield::layout::Layout;
 use crate::nearfield::pack::{write_pack, Pack, PackOptions};
 use crate::nearfield::proxy::triangles_of;
@@ -286,17 +284,7 @@ fn render_with(
     let pos = match targets.iter().position(|t| t.desc.width == w && t.desc.height == h) {
         Some(p) => p,
         None => {
-            targets.push(RenderTarget::new(
-                &r.ctx,
-                &TargetDesc {
-                    width: w,
-                    height: h,
-                    color: ColorFormat::Rgba32Float,
-                    depth: DepthFormat::None,
-                    exportable: false,
-                    semaphores: false,
-                },
-            )?);
+            targets.push(RenderTarget::new(&r.ctx, &TargetDesc::luminance(w, h))?);
             if targets.len() > 8 {
                 targets.remove(0);
             }
@@ -305,11 +293,7 @@ fn render_with(
     };
     let t = &mut targets[pos];
     r.render(t, cam, &RenderOptions::default())?;
-    let px = t.read(&r.ctx, Attachment::Color)?;
-    Ok(px
-        .chunks_exact(16)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
+    t.read_luminance(&r.ctx)
 }
 
 /// Errors of the harness.

@@ -111,6 +111,21 @@ pub struct TargetDesc {
     pub semaphores: bool,
 }
 
+impl TargetDesc {
+    /// An offscreen target for measurements and stills: luminance in cd/m² (RGBA32F), no depth, not
+    /// exported.
+    pub fn luminance(width: u32, height: u32) -> Self {
+        TargetDesc {
+            width,
+            height,
+            color: ColorFormat::Rgba32Float,
+            depth: DepthFormat::None,
+            exportable: false,
+            semaphores: false,
+        }
+    }
+}
+
 /// Largest target side in pixels.
 pub const MAX_TARGET_SIZE: u32 = 16384;
 
@@ -292,6 +307,24 @@ impl RenderTarget {
             Attachment::Color => self.desc.color.bytes_per_pixel(),
             Attachment::Depth => self.desc.depth.bytes_per_pixel(),
         }
+    }
+
+    /// The luminance (cd/m², the R channel) of an RGBA32F colour target, in the row order of
+    /// [`RenderTarget::read`].
+    ///
+    /// Errors: another colour format, or those of [`RenderTarget::read`].
+    pub fn read_luminance(&mut self, ctx: &GpuContext) -> Result<Vec<f32>, GpuError> {
+        if self.desc.color != ColorFormat::Rgba32Float {
+            return Err(GpuError::invalid(
+                "target",
+                "luminance read-back needs an RGBA32F colour target",
+            ));
+        }
+        let px = self.read(ctx, Attachment::Color)?;
+        Ok(px
+            .chunks_exact(16)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect())
     }
 
     /// Reads `which` back into memory: rows of `width · bytes_per_pixel` bytes, memory row 0 first

@@ -301,22 +301,11 @@ fn percentile_luminance(
     h: u32,
     q: f64,
 ) -> Result<f64, Box<dyn std::error::Error>> {
-    let mut t = RenderTarget::new(
-        &r.ctx,
-        &TargetDesc {
-            width: w,
-            height: h,
-            color: ColorFormat::Rgba32Float,
-            depth: DepthFormat::None,
-            exportable: false,
-            semaphores: false,
-        },
-    )?;
+    let mut t = RenderTarget::new(&r.ctx, &TargetDesc::luminance(w, h))?;
     r.render(&mut t, cam, &RenderOptions::default())?;
-    let px = t.read(&r.ctx, Attachment::Color)?;
-    let mut l: Vec<f32> = px
-        .chunks_exact(16)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+    let mut l: Vec<f32> = t
+        .read_luminance(&r.ctx)?
+        .into_iter()
         .filter(|v| *v > 0.0 && v.is_finite())
         .collect();
     if l.is_empty() {
