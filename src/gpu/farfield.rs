@@ -11,7 +11,7 @@ use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::meshes;
 use super::slots::{DrawSlots, SLOT};
-use super::target::{ColorFormat, DepthFormat, RenderTarget};
+use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, RenderTarget, POSITION_LAYOUT};
 use super::GpuError;
 use crate::photometry::Photometry;
 
@@ -291,23 +291,7 @@ impl FarfieldPass {
             return Ok(p.clone());
         }
         let p = ctx.scoped("creating a far-field pipeline", || {
-            let color_targets = [
-                Some(wgpu::ColorTargetState {
-                    format: key.color.wgpu(),
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-                key.depth_copy.then_some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Float,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-            ];
-            let targets: &[Option<wgpu::ColorTargetState>] = if key.depth_copy {
-                &color_targets
-            } else {
-                &color_targets[..1]
-            };
+            let targets = &frame_color_targets(key.color, key.depth_copy);
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(if key.lines {
                     "far-field lines"
@@ -319,11 +303,7 @@ impl FarfieldPass {
                     module: &self.module,
                     entry_point: Some("vs_main"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                    })],
+                    buffers: &[Some(POSITION_LAYOUT)],
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: if key.lines {
@@ -334,17 +314,7 @@ impl FarfieldPass {
                     cull_mode: None,
                     ..Default::default()
                 },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: wgpu::TextureFormat::Depth32Float,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(if key.reversed_z {
-                        wgpu::CompareFunction::Greater
-                    } else {
-                        wgpu::CompareFunction::Less
-                    }),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
+                depth_stencil: Some(frame_depth_state(key.reversed_z)),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &self.module,

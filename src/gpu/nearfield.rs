@@ -18,7 +18,7 @@ use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::slots::{DrawSlots, SLOT};
-use super::target::{ColorFormat, DepthFormat};
+use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, POSITION_LAYOUT};
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::pack::Pack;
@@ -488,8 +488,8 @@ impl NearfieldPass {
         proxy: Option<Vec<[f32; 3]>>,
         opts: &NearfieldOptions,
     ) -> Result<NearfieldLuminaire, GpuError> {
-        let set = pack.rayset().clone();
-        let selection = Arc::new(Selection::build(&set, &opts.selection)?);
+        let set = pack.rayset();
+        let selection = Arc::new(Selection::build(set, &opts.selection)?);
         let chunks = ChunkLayout::new(&pack).map_err(|m| GpuError::invalid("pack", m))?;
         let sphere = (set.sphere.centre_m, set.sphere.radius_m);
         let mut content = match opts.content_radius_m {
@@ -767,23 +767,7 @@ impl NearfieldPass {
             return Ok(p.clone());
         }
         let p = ctx.scoped("creating a near-field pipeline", || {
-            let color_targets = [
-                Some(wgpu::ColorTargetState {
-                    format: key.color.wgpu(),
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-                key.depth_copy.then_some(wgpu::ColorTargetState {
-                    format: wgpu::TextureFormat::R32Float,
-                    blend: None,
-                    write_mask: wgpu::ColorWrites::ALL,
-                }),
-            ];
-            let targets: &[Option<wgpu::ColorTargetState>] = if key.depth_copy {
-                &color_targets
-            } else {
-                &color_targets[..1]
-            };
+            let targets = &frame_color_targets(key.color, key.depth_copy);
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("near-field"),
                 layout: Some(&self.pipeline_layout),
@@ -791,28 +775,14 @@ impl NearfieldPass {
                     module: &self.module,
                     entry_point: Some("vs_main"),
                     compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: 12,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                    })],
+                    buffers: &[Some(POSITION_LAYOUT)],
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
                     cull_mode: None,
                     ..Default::default()
                 },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: wgpu::TextureFormat::Depth32Float,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(if key.reversed_z {
-                        wgpu::CompareFunction::Greater
-                    } else {
-                        wgpu::CompareFunction::Less
-                    }),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
+                depth_stencil: Some(frame_depth_state(key.reversed_z)),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &self.module,

@@ -126,6 +126,49 @@ impl TargetDesc {
     }
 }
 
+/// The colour attachments of a frame into a target: its colour format, plus the R32F depth copy when
+/// the target has one (`depth_copy`). Every pass drawing into a frame uses these.
+pub(crate) fn frame_color_targets(color: ColorFormat, depth_copy: bool) -> Vec<Option<wgpu::ColorTargetState>> {
+    let mut t = vec![Some(wgpu::ColorTargetState {
+        format: color.wgpu(),
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    if depth_copy {
+        t.push(Some(wgpu::ColorTargetState {
+            format: wgpu::TextureFormat::R32Float,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
+        }));
+    }
+    t
+}
+
+/// The depth test of a frame's draws: Depth32Float, written, nearer wins (greater for reversed Z).
+pub(crate) fn frame_depth_state(reversed_z: bool) -> wgpu::DepthStencilState {
+    wgpu::DepthStencilState {
+        format: wgpu::TextureFormat::Depth32Float,
+        depth_write_enabled: Some(true),
+        depth_compare: Some(if reversed_z {
+            wgpu::CompareFunction::Greater
+        } else {
+            wgpu::CompareFunction::Less
+        }),
+        stencil: wgpu::StencilState::default(),
+        bias: wgpu::DepthBiasState::default(),
+    }
+}
+
+/// Vertex attributes of the passes' meshes: one `vec3<f32>` position (m, luminaire frame).
+pub(crate) const POSITION_ATTRIBUTES: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
+
+/// Vertex buffer layout of the passes' meshes (tightly packed positions).
+pub(crate) const POSITION_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: 12,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &POSITION_ATTRIBUTES,
+};
+
 /// Largest target side in pixels.
 pub const MAX_TARGET_SIZE: u32 = 16384;
 
