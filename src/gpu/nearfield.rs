@@ -322,7 +322,6 @@ struct DrawUniform {
     clip_from_local: [[f32; 4]; 4],
     eye_local: [f32; 4],
     params: [f32; 4],
-    flags: [u32; 4],
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -335,6 +334,13 @@ struct PipelineKey {
     pool_pages: u32,
     /// The shader's `IDENTITY_MAP`.
     identity_map: bool,
+    /// The shader's `SELECTION` (0 nearest, 1 idw4, 2 continuous).
+    selection: u32,
+    /// The shader's `PROXY`.
+    proxy: bool,
+    /// Faces culled: none for a proxy, back faces of the bounding box from outside it, front faces
+    /// from inside.
+    cull: Option<wgpu::Face>,
 }
 
 /// Pipelines and layouts of the near-field pass.
@@ -779,7 +785,7 @@ impl NearfieldPass {
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
-                    cull_mode: None,
+                    cull_mode: key.cull,
                     ..Default::default()
                 },
                 depth_stencil: Some(frame_depth_state(key.reversed_z)),
@@ -795,6 +801,8 @@ impl NearfieldPass {
                         constants: &[
                             ("POOL_PAGES", f64::from(key.pool_pages)),
                             ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
+                            ("SELECTION", f64::from(key.selection)),
+                            ("PROXY", f64::from(u8::from(key.proxy))),
                         ],
                         ..Default::default()
                     },
@@ -854,12 +862,16 @@ impl NearfieldPass {
                 SelectionMode::Idw4 => 1,
                 SelectionMode::Continuous => 2,
             };
-            draws.push((slots.len(), lum.clone(), proxy));
+            let cull = match (proxy, outside) {
+                (true, _) => None,
+                (false, true) => Some(wgpu::Face::Back),
+                (false, false) => Some(wgpu::Face::Front),
+            };
+            draws.push((slots.len(), lum.clone(), proxy, mode, cull));
             slots.push(DrawUniform {
                 clip_from_local: (clip_from_world * *model).to_cols_array_2d(),
                 eye_local: eye.to_array(),
                 params: [options.exposure, mode_out, 0.0, 0.0],
-                flags: [mode, u32::from(proxy), u32::from(outside), 0],
             });
         }
         for (lum, mut cams) in per_lum {
@@ -869,7 +881,7 @@ impl NearfieldPass {
         }
         self.uniforms.write(ctx, &self.draw_layout, &slots);
         let mut with_pipelines = Vec::with_capacity(draws.len());
-        for (slot, lum, proxy) in draws {
+        for (slot, lum, proxy, selection, cull) in draws {
             let pipeline = self.pipeline(
                 ctx,
                 PipelineKey {
@@ -878,6 +890,9 @@ impl NearfieldPass {
                     reversed_z: camera.reversed_z,
                     pool_pages: if lum.pages.len() <= 1 { 1 } else { MAX_POOL_PAGES as u32 },
                     identity_map: lum.identity_map,
+                    selection,
+                    proxy,
+                    cull,
                 },
             )?;
             with_pipelines.push((slot, lum, proxy, pipeline));
