@@ -36,15 +36,12 @@ struct Lum {
     sphere: vec4<f32>,
     // Content ball: centre xyz (m), radius (m).
     content: vec4<f32>,
-    // n_phi, n_theta, tile edge T (px), words per pool slot.
+    // n_phi, n_theta, number of table chunks (the slot chunks follow them in chunk_map), unused.
     grid: vec4<u32>,
     // Word offsets in `lists`: triangle offsets, triangle items, nearest offsets, nearest items.
     lists_a: vec4<u32>,
-    // idw4 offsets, idw4 items, number of table chunks (slot-chunk maps follow them in chunk_map),
-    // slots per slot chunk.
+    // idw4 offsets, idw4 items, unused, unused.
     lists_b: vec4<u32>,
-    // words per chunk, chunks per pool page, table entries per table chunk, unused.
-    pool: vec4<u32>,
     // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z, w unused.
     gap: vec4<f32>,
     // The proxy's BVH in `tris` (src/nearfield/bvh.rs): x = first node word (2 per node), y = first
@@ -92,6 +89,17 @@ override POOL_PAGES: u32 = 8u;
 // Set when the whole pack is resident with pack chunk c in pool chunk c: the chunk map is skipped.
 override IDENTITY_MAP: bool = false;
 
+// The pool's layout (the luminaire's; `src/gpu/residency.rs`): tile edge T (px), words per tile slot,
+// words per chunk, chunks per pool page, tile-table entries per table chunk, slots per slot chunk.
+// Pipeline constants because the fetch divides by them: a division by a constant is a multiply and a
+// shift, by a value read from a buffer a SIMD rasteriser runs as one scalar division per lane.
+override TILE_EDGE: u32 = 8u;
+override SLOT_WORDS: u32 = 33u;
+override CHUNK_WORDS: u32 = 16384u;
+override PAGE_CHUNKS: u32 = 2048u;
+override TABLE_PER_CHUNK: u32 = 16384u;
+override SLOTS_PER_CHUNK: u32 = 496u;
+
 // The instance's selection (0 nearest, 1 idw4, 2 continuous) and whether it draws its proxy (else the
 // bounding box, with the pipeline culling the faces that do not apply: back faces from outside the
 // box, front faces from inside). Pipeline constants rather than per-draw data: a software rasteriser
@@ -109,12 +117,11 @@ fn pool_chunk(c: u32) -> u32 {
 }
 
 fn pool_word(chunk: u32, word: u32) -> u32 {
-    let per_page = lum.pool.y;
     if (POOL_PAGES == 1u) {
-        return pool0[chunk * lum.pool.x + word];
+        return pool0[chunk * CHUNK_WORDS + word];
     }
-    let page = chunk / per_page;
-    let i = (chunk % per_page) * lum.pool.x + word;
+    let page = chunk / PAGE_CHUNKS;
+    let i = (chunk % PAGE_CHUNKS) * CHUNK_WORDS + word;
     switch page {
         case 0u: { return pool0[i]; }
         case 1u: { return pool1[i]; }
@@ -172,7 +179,7 @@ var<private> missed: bool = false;
 // The pack's tile table entry of the pixel's tile gives a slot (EMPTY: no light); the slot's first
 // word is its scale (> 0: fp16 values × scale follow, two per word; ≤ 0: f32 values follow).
 fn texel(cam: Cam, col: i32, row: i32) -> f32 {
-    let t = lum.grid.z;
+    let t = TILE_EDGE;
     let c = u32(col);
     let r = u32(row);
     // Tile position in the camera's tile box (wraps to a huge value left of or above it).
@@ -180,16 +187,16 @@ fn texel(cam: Cam, col: i32, row: i32) -> f32 {
     let by = r / t - cam.bbox.y;
     let in_box = col >= 0 && row >= 0 && c < cam.size.x && r < cam.size.y && bx < cam.bbox.z && by < cam.bbox.w;
     let entry = cam.table + select(0u, by * cam.bbox.z + bx, in_box);
-    let tchunk = pool_chunk(entry / lum.pool.z);
+    let tchunk = pool_chunk(entry / TABLE_PER_CHUNK);
     let t_ok = tchunk != EMPTY;
-    let slot = pool_word(select(0u, tchunk, t_ok), entry % lum.pool.z);
+    let slot = pool_word(select(0u, tchunk, t_ok), entry % TABLE_PER_CHUNK);
     let has_tile = in_box && t_ok && slot != EMPTY;
     let sl = select(0u, slot, has_tile);
-    let per = lum.lists_b.w;
-    let schunk = pool_chunk(lum.lists_b.z + sl / per);
+    let per = SLOTS_PER_CHUNK;
+    let schunk = pool_chunk(lum.grid.z + sl / per);
     let s_ok = schunk != EMPTY;
     let sc = select(0u, schunk, s_ok);
-    let base = (sl % per) * lum.grid.w;
+    let base = (sl % per) * SLOT_WORDS;
     let scale = bitcast<f32>(pool_word(sc, base));
     let k = (r % t) * t + (c % t);
     let half = scale > 0.0;

@@ -194,6 +194,116 @@ fn from_a_capture_camera_every_mode_reproduces_its_image() {
     gpu_common::assert_no_validation_messages();
 }
 
+/// Colour and depth bytes of a frame.
+fn render_bytes(r: &mut Renderer, cam: &Camera, k: &Intrinsics) -> (Vec<u8>, Vec<u8>) {
+    let mut t = lumiview::gpu::RenderTarget::new(
+        &r.ctx,
+        &TargetDesc {
+            width: k.width,
+            height: k.height,
+            color: ColorFormat::Rgba32Float,
+            depth: DepthFormat::R32Float,
+            exportable: false,
+            semaphores: false,
+        },
+    )
+    .unwrap();
+    let hc = HostCamera::from_pinhole(cam, k, 0.01, 20.0);
+    r.render(&mut t, &hc, &RenderOptions::default()).unwrap();
+    (
+        t.read(&r.ctx, Attachment::Color).unwrap(),
+        t.read(&r.ctx, Attachment::Depth).unwrap(),
+    )
+}
+
+/// Without a proxy the pass draws the bounding polygon of the pixels that can be lit
+/// (`gpu::lit_bound`) where it applies: the frame must light the same pixels as the one drawn with the
+/// content ball's box, with the same values and depths up to fp32 rounding, in every mode, from far,
+/// near, grazing and inside-the-sphere eyes.
+#[test]
+fn bounding_polygon_renders_what_the_box_renders() {
+    let _g = gpu_common::GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = gpu_common::renderer() else {
+        return;
+    };
+    let (pack, _) = packed("star-panel", 300, 96);
+    let tight = r.add_pack(pack.clone(), None, &NearfieldOptions::default()).unwrap();
+    let boxed = r
+        .add_pack(
+            pack,
+            None,
+            &NearfieldOptions {
+                bounding_polygon: false,
+                ..NearfieldOptions::default()
+            },
+        )
+        .unwrap();
+    let eyes = [
+        DVec3::new(0.0, 0.05, -2.5),
+        DVec3::new(1.3, 0.5, -1.2),
+        DVec3::new(-0.9, 1.4, -0.6),
+        DVec3::new(1.9, 0.2, -0.12),
+        // Inside the capture sphere, outside the content ball.
+        DVec3::new(0.25, -0.35, -0.75),
+    ];
+    let lum = match r.luminaire(tight).unwrap() {
+        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
+        _ => panic!("not a near-field luminaire"),
+    };
+    let (mut lit_views, mut polygons) = (0, 0);
+    for (e, eye) in eyes.iter().enumerate() {
+        // The content (about 0.3 m across) framed.
+        let fov = 2.0 * (0.3 / eye.length()).atan().to_degrees();
+        let (cam, k) = eye_camera(*eye, 128, fov);
+        for mode in [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous] {
+            let hc = HostCamera::from_pinhole(&cam, &k, 0.01, 20.0);
+            let polygon = lum.bounding_polygon(hc.eye_in(Mat4::IDENTITY), hc.clip_from_world(), mode);
+            polygons += usize::from(polygon.is_some_and(|p| !p.is_empty()));
+            let mut frames = Vec::new();
+            for id in [tight, boxed] {
+                let inst = r.add_instance(id, Mat4::IDENTITY).unwrap();
+                r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy: false })
+                    .unwrap();
+                frames.push(render_bytes(&mut r, &cam, &k));
+                r.remove_instance(inst).unwrap();
+            }
+            let lit = frames[1]
+                .0
+                .chunks_exact(16)
+                .filter(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) > 0.0)
+                .count();
+            lit_views += usize::from(lit > 500);
+            // The lit pixels must be the same; values and depths may differ by fp32 rounding, as the
+            // shader works on the line through a different point of it.
+            let f = |b: &[u8]| -> Vec<f32> { bytemuck::cast_slice::<u8, f32>(b).to_vec() };
+            let (ca, cb) = (f(&frames[0].0), f(&frames[1].0));
+            let (da, db) = (f(&frames[0].1), f(&frames[1].1));
+            // A few pixels may differ more: continuous mode switches from the log to the linear blend
+            // where a camera's sample becomes exactly dark, and rounding can move a silhouette pixel's
+            // sample across that.
+            let (mut mask, mut off, mut depth) = (0, 0, 0f32);
+            for i in 0..db.len() {
+                let (x, y) = (ca[4 * i], cb[4 * i]);
+                if (x > 0.0) != (y > 0.0) {
+                    mask += 1;
+                } else if y > 0.0 {
+                    off += usize::from((x - y).abs() > 2e-3 * y);
+                    depth = depth.max((da[i] - db[i]).abs());
+                }
+            }
+            assert!(
+                mask == 0 && off <= 1 + lit / 500 && depth < 1e-6,
+                "eye {e} {eye}, {mode:?}: {mask} px lit in one frame only, {off} differ by > 0.2 %, \
+                 depths by up to {depth:e} ({lit} lit)"
+            );
+        }
+    }
+    assert!(lit_views >= 12, "only {lit_views} views show the luminaire");
+    // The far and grazing eyes in every mode at least (the polygon, not the box, was compared).
+    assert!(polygons >= 12, "only {polygons} views drew the bounding polygon");
+    gpu_common::assert_no_validation_messages();
+}
+
 #[test]
 fn streaming_under_a_quarter_budget_renders_the_resident_image() {
     let _g = gpu_common::GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());

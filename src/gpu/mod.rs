@@ -5,13 +5,15 @@
 //! - [`camera`]: the host's matrices and conventions.
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`meshes`]: CPU geometry of openings, solids and housings.
-//! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles.
+//! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles and the
+//!   [`lit_bound`] polygon it draws without a proxy.
 //! - [`slots`]: per-draw records at dynamic offsets.
 //! - [`renderer`]: luminaires, instances and frames: what the C API drives.
 
 pub mod camera;
 pub mod context;
 pub mod farfield;
+pub mod lit_bound;
 pub mod meshes;
 pub mod nearfield;
 pub mod renderer;

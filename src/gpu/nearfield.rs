@@ -16,6 +16,7 @@ use glam::{DVec3, Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
+use super::lit_bound::LitDirections;
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, POSITION_LAYOUT};
@@ -47,6 +48,10 @@ pub struct NearfieldOptions {
     pub content_radius_m: Option<f64>,
     /// Selection-table options.
     pub selection: SelectionOptions,
+    /// Without a proxy, draw the bounding polygon of the pixels that can be lit ([`crate::gpu::lit_bound`])
+    /// instead of the content ball's box where it applies. The image is the same either way (the
+    /// tests compare them); only the work differs.
+    pub bounding_polygon: bool,
 }
 
 impl Default for NearfieldOptions {
@@ -55,6 +60,7 @@ impl Default for NearfieldOptions {
             budget_bytes: DEFAULT_BUDGET_BYTES,
             content_radius_m: None,
             selection: SelectionOptions::default(),
+            bounding_polygon: true,
         }
     }
 }
@@ -123,6 +129,10 @@ pub struct NearfieldLuminaire {
     misses: wgpu::Buffer,
     pages: Vec<wgpu::Buffer>,
     chunks_per_page: u32,
+    pool_layout: PoolLayout,
+    /// The directions each camera's tile box covers, for the bounding polygon (bounding mode).
+    lit: LitDirections,
+    bounding_polygon: bool,
     bind: wgpu::BindGroup,
     bounds: (wgpu::Buffer, u32),
     proxy: Option<(wgpu::Buffer, u32)>,
@@ -211,6 +221,26 @@ impl NearfieldLuminaire {
     pub fn cameras_for_view(&self, eye: Vec4, mode: SelectionMode) -> Vec<u32> {
         let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
         self.selection.cameras_of_cells(mode, cells.into_iter())
+    }
+
+    /// Whether a view from `eye` (as in [`Self::cameras_for_view`]) without the proxy may draw the
+    /// bounding polygon: it is enabled, and the eye is a point outside the content ball.
+    fn polygon_applies(&self, eye: Vec4) -> bool {
+        self.bounding_polygon
+            && eye.w > 0.5
+            && (eye.truncate().as_dvec3() - self.sphere.0).length() > 1.01 * self.content_radius_m
+    }
+
+    /// The bounding polygon ([`crate::gpu::lit_bound`]) the pass draws for an instance in `mode`
+    /// without its proxy, seen from `eye` (luminaire frame, as in [`Self::cameras_for_view`]) through
+    /// `clip_from_local`: a triangle list (luminaire frame, m), empty when no pixel can be lit; `None`
+    /// where the pass draws the content ball's box.
+    pub fn bounding_polygon(&self, eye: Vec4, clip_from_local: Mat4, mode: SelectionMode) -> Option<Vec<[f32; 3]>> {
+        if !self.polygon_applies(eye) {
+            return None;
+        }
+        let cams = self.cameras_for_view(eye, mode);
+        self.lit.bound(&cams, mode, clip_from_local, eye.truncate())
     }
 
     fn make_resident(&self, ctx: &GpuContext, cameras: &[u32]) -> Result<(), GpuError> {
@@ -310,7 +340,6 @@ struct LumUniform {
     grid: [u32; 4],
     lists_a: [u32; 4],
     lists_b: [u32; 4],
-    pool: [u32; 4],
     gap: [f32; 4],
     bvh: [u32; 4],
 }
@@ -324,8 +353,23 @@ struct DrawUniform {
     params: [f32; 4],
 }
 
+/// The pool layout the shader divides by, given as pipeline constants (`TILE_EDGE` … in
+/// shaders/nearfield.wgsl): lavapipe runs a division by a buffer value as one scalar division per lane,
+/// a division by a constant as a multiply and a shift.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PoolLayout {
+    tile_edge: u32,
+    slot_words: u32,
+    chunk_words: u32,
+    page_chunks: u32,
+    table_per_chunk: u32,
+    slots_per_chunk: u32,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
+    /// The luminaire's pool layout.
+    pool_layout: PoolLayout,
     color: ColorFormat,
     depth_copy: bool,
     reversed_z: bool,
@@ -352,13 +396,26 @@ pub struct NearfieldPass {
     pipeline_layout: wgpu::PipelineLayout,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
     uniforms: DrawSlots,
+    /// This frame's bounding polygons (luminaire frames, m), with the buffer's capacity in vertices.
+    polygons: Option<(wgpu::Buffer, u64)>,
+}
+
+/// What a draw rasterises.
+#[derive(Debug, Clone, Copy)]
+enum DrawGeometry {
+    /// The luminaire's proxy mesh.
+    Proxy,
+    /// The box around the content ball.
+    Box,
+    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]).
+    Polygon { first: u32, count: u32 },
 }
 
 /// One prepared frame of the pass: draws whose uniforms are written.
 #[derive(Debug, Default)]
 pub struct NearfieldFrame {
-    /// Uniform slot, luminaire, proxy mode, pipeline.
-    draws: Vec<(usize, Arc<NearfieldLuminaire>, bool, wgpu::RenderPipeline)>,
+    /// Uniform slot, luminaire, geometry, pipeline.
+    draws: Vec<(usize, Arc<NearfieldLuminaire>, DrawGeometry, wgpu::RenderPipeline)>,
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -480,6 +537,7 @@ impl NearfieldPass {
                 pipeline_layout,
                 pipelines: HashMap::new(),
                 uniforms: DrawSlots::new("near-field draws", wgpu::BufferUsages::STORAGE),
+                polygons: None,
             })
         })
     }
@@ -592,17 +650,22 @@ impl NearfieldPass {
             let lum_uniform = LumUniform {
                 sphere: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, sphere.1 as f32],
                 content: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, content as f32],
-                grid: [g.n_phi, g.n_theta, layout.tile_size, layout.entry_bytes / 4],
+                grid: [g.n_phi, g.n_theta, chunks.table_chunks, 0],
                 lists_a: [tri_off, tri_items, n1_off, n1_items],
-                lists_b: [n4_off, n4_items, chunks.table_chunks, chunks.slots_per_chunk],
-                pool: [(CHUNK_BYTES / 4) as u32, 0, chunks.entries_per_chunk, 0],
+                lists_b: [n4_off, n4_items, 0, 0],
                 bvh: bvh_bases,
                 // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm).
                 gap: [g.cos_max_gap, (1e-4 * content).max(1e-6) as f32, 0.0, 0.0],
             };
             let chunks_per_page = (max_binding / CHUNK_BYTES).max(1) as u32;
-            let mut lum_uniform = lum_uniform;
-            lum_uniform.pool[1] = chunks_per_page;
+            let pool_layout = PoolLayout {
+                tile_edge: layout.tile_size,
+                slot_words: layout.entry_bytes / 4,
+                chunk_words: (CHUNK_BYTES / 4) as u32,
+                page_chunks: chunks_per_page,
+                table_per_chunk: chunks.entries_per_chunk,
+                slots_per_chunk: chunks.slots_per_chunk,
+            };
             let ubuf = buffer_init(
                 ctx,
                 "near-field luminaire",
@@ -741,6 +804,9 @@ impl NearfieldPass {
                 misses,
                 pages,
                 chunks_per_page,
+                pool_layout,
+                lit: LitDirections::new(set, &pack, &selection),
+                bounding_polygon: opts.bounding_polygon,
                 bind,
                 bounds,
                 proxy: proxy_buf,
@@ -803,6 +869,12 @@ impl NearfieldPass {
                             ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
                             ("SELECTION", f64::from(key.selection)),
                             ("PROXY", f64::from(u8::from(key.proxy))),
+                            ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
+                            ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
+                            ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
+                            ("PAGE_CHUNKS", f64::from(key.pool_layout.page_chunks)),
+                            ("TABLE_PER_CHUNK", f64::from(key.pool_layout.table_per_chunk)),
+                            ("SLOTS_PER_CHUNK", f64::from(key.pool_layout.slots_per_chunk)),
                         ],
                         ..Default::default()
                     },
@@ -841,16 +913,28 @@ impl NearfieldPass {
         } else {
             0.0
         };
+        let mut polygons: Vec<[f32; 3]> = Vec::new();
         for (lum, model, settings) in instances {
             let eye = camera.eye_in(*model);
+            let clip_from_local = clip_from_world * *model;
+            let proxy = settings.proxy && lum.proxy.is_some();
+            let polygon_view = !proxy && lum.polygon_applies(eye);
+            let cams = if !lum.fully_resident || polygon_view {
+                lum.cameras_for_view(eye, settings.mode)
+            } else {
+                Vec::new()
+            };
+            let bound = if polygon_view {
+                lum.lit.bound(&cams, settings.mode, clip_from_local, eye.truncate())
+            } else {
+                None
+            };
             if !lum.fully_resident {
-                let cams = lum.cameras_for_view(eye, settings.mode);
                 match per_lum.iter_mut().find(|(l, _)| Arc::ptr_eq(l, lum)) {
                     Some((_, v)) => v.extend(cams),
                     None => per_lum.push((lum.clone(), cams)),
                 }
             }
-            let proxy = settings.proxy && lum.proxy.is_some();
             let outside = if eye.w > 0.5 {
                 let e = eye.truncate().as_dvec3() - lum.sphere.0;
                 e.abs().max_element() > lum.content_radius_m
@@ -862,14 +946,27 @@ impl NearfieldPass {
                 SelectionMode::Idw4 => 1,
                 SelectionMode::Continuous => 2,
             };
-            let cull = match (proxy, outside) {
-                (true, _) => None,
-                (false, true) => Some(wgpu::Face::Back),
-                (false, false) => Some(wgpu::Face::Front),
+            let (geometry, cull) = match (proxy, bound, outside) {
+                (true, _, _) => (DrawGeometry::Proxy, None),
+                // No selectable camera has light in the view.
+                (false, Some(p), _) if p.is_empty() => continue,
+                (false, Some(p), _) => {
+                    let first = polygons.len() as u32;
+                    polygons.extend_from_slice(&p);
+                    (
+                        DrawGeometry::Polygon {
+                            first,
+                            count: p.len() as u32,
+                        },
+                        None,
+                    )
+                }
+                (false, None, true) => (DrawGeometry::Box, Some(wgpu::Face::Back)),
+                (false, None, false) => (DrawGeometry::Box, Some(wgpu::Face::Front)),
             };
-            draws.push((slots.len(), lum.clone(), proxy, mode, cull));
+            draws.push((slots.len(), lum.clone(), geometry, mode, cull));
             slots.push(DrawUniform {
-                clip_from_local: (clip_from_world * *model).to_cols_array_2d(),
+                clip_from_local: clip_from_local.to_cols_array_2d(),
                 eye_local: eye.to_array(),
                 params: [options.exposure, mode_out, 0.0, 0.0],
             });
@@ -880,8 +977,25 @@ impl NearfieldPass {
             lum.make_resident(ctx, &cams)?;
         }
         self.uniforms.write(ctx, &self.draw_layout, &slots);
+        if !polygons.is_empty() {
+            let n = polygons.len() as u64;
+            if self.polygons.as_ref().is_none_or(|(_, cap)| *cap < n) {
+                let cap = n.next_power_of_two().max(256);
+                let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("near-field bounding polygons"),
+                    size: cap * 12,
+                    usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                self.polygons = Some((buffer, cap));
+            }
+            if let Some((b, _)) = &self.polygons {
+                ctx.queue.write_buffer(b, 0, bytemuck::cast_slice(&polygons));
+            }
+        }
         let mut with_pipelines = Vec::with_capacity(draws.len());
-        for (slot, lum, proxy, selection, cull) in draws {
+        for (slot, lum, geometry, selection, cull) in draws {
+            let proxy = matches!(geometry, DrawGeometry::Proxy);
             let pipeline = self.pipeline(
                 ctx,
                 PipelineKey {
@@ -890,12 +1004,13 @@ impl NearfieldPass {
                     reversed_z: camera.reversed_z,
                     pool_pages: if lum.pages.len() <= 1 { 1 } else { MAX_POOL_PAGES as u32 },
                     identity_map: lum.identity_map,
+                    pool_layout: lum.pool_layout,
                     selection,
                     proxy,
                     cull,
                 },
             )?;
-            with_pipelines.push((slot, lum, proxy, pipeline));
+            with_pipelines.push((slot, lum, geometry, pipeline));
         }
         Ok(NearfieldFrame { draws: with_pipelines })
     }
@@ -905,16 +1020,17 @@ impl NearfieldPass {
         let Some(ubind) = self.uniforms.bind_group() else {
             return;
         };
-        for (slot, lum, proxy, pipeline) in &frame.draws {
+        for (slot, lum, geometry, pipeline) in &frame.draws {
+            let (vb, range) = match (geometry, &lum.proxy, &self.polygons) {
+                (DrawGeometry::Proxy, Some(p), _) => (&p.0, 0..p.1),
+                (DrawGeometry::Polygon { first, count }, _, Some((b, _))) => (b, *first..*first + *count),
+                _ => (&lum.bounds.0, 0..lum.bounds.1),
+            };
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, ubind, &[(*slot as u64 * SLOT) as u32]);
             pass.set_bind_group(1, &lum.bind, &[]);
-            let (vb, n) = match (&lum.proxy, proxy) {
-                (Some(p), true) => (&p.0, p.1),
-                _ => (&lum.bounds.0, lum.bounds.1),
-            };
             pass.set_vertex_buffer(0, vb.slice(..));
-            pass.draw(0..n, 0..1);
+            pass.draw(range, 0..1);
         }
     }
 }

@@ -1,0 +1,320 @@
+//! A tight bounding polygon for the near-field pass without a proxy.
+//!
+//! Without a proxy, the fragment of view line (eye, v) finds Q, the line's first point on the capture
+//! sphere, selects cameras around Q, and samples each selected camera j at the pixel `K_j · R_j · v`
+//! (the view ray rotated into the camera; see shaders/nearfield.wgsl). So the pixel can hold light only
+//! if, for some camera j the view can select,
+//! - v lies in D_j, the cone of directions camera j maps into its box of kept tiles (widened by a
+//!   pixel for the bilinear footprint): four corner directions, and
+//! - Q lies where j can be selected: within ρ_j (great-circle) of j's vertex, ρ_j being the farthest a
+//!   point selecting j can be (continuous: j's longest edge to a neighbour in a non-hole triangle, as a
+//!   point of a triangle is nearest its farthest vertex at a vertex; nearest: the largest circumradius
+//!   around j, which bounds j's Voronoi cell, at most the selection's max gap; idw4: the max gap). The
+//!   lines from the eye whose first hit lies in that cap leave the eye (forwards from outside the
+//!   sphere, backwards from inside) within the cone E_j around the direction of j's vertex point,
+//!   of half-angle asin(chord / distance) where chord is the cap's chord.
+//!
+//! On the screen both cones are convex polygons (while every direction involved lies in front of the
+//! eye), E_j taken as the octagon circumscribing its circle; the convex hull of the intersections
+//! D_j ∩ E_j over the selectable cameras contains every pixel that can be lit. The pass draws that hull,
+//! placed on the plane through the capture centre facing the eye, instead of the content ball's box:
+//! a fragment anywhere on a view line computes the same luminance (the shader works on the line and
+//! writes the stand-in depth itself), so moving the drawn surface along the lines changes only which
+//! fragments run. D_j alone is not enough: from an eye farther than the capture sphere a camera's
+//! cone of directions is wider than the luminaire as seen from the eye.
+
+use glam::{DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
+
+use crate::nearfield::pack::Pack;
+use crate::nearfield::select::{Selection, SelectionMode};
+use crate::nearfield::RayImageSet;
+
+/// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
+#[derive(Debug, Clone)]
+struct CameraCone {
+    corners: [Vec3; 4],
+    /// Unit direction of the camera's selection vertex from the capture centre.
+    vertex: DVec3,
+    /// ρ for nearest, idw4, continuous.
+    rho: [f64; 3],
+}
+
+/// The per-camera data of the bounding polygon.
+#[derive(Debug, Clone, Default)]
+pub struct LitDirections {
+    cameras: Vec<Option<CameraCone>>,
+    /// Capture centre (m) and radius (m).
+    sphere: (DVec3, f64),
+}
+
+impl LitDirections {
+    /// The cones of every camera of a pack that has kept tiles and is a selection vertex.
+    pub fn new(set: &RayImageSet, pack: &Pack, sel: &Selection) -> Self {
+        let t = f64::from(pack.layout().tile_size);
+        let dirs = sel.vertex_directions();
+        let angle = |a: DVec3, b: DVec3| a.cross(b).length().atan2(a.dot(b));
+        let max_gap = sel.max_gap_rad();
+        // Per vertex: longest edge in a non-hole triangle, largest circumradius (capped at max_gap).
+        let mut edge = vec![0f64; dirs.len()];
+        let mut circ = vec![0f64; dirs.len()];
+        for (i, tri) in sel.triangles().iter().enumerate() {
+            let r = sel.circumcap(i).map_or(max_gap, |c| c.1).min(max_gap);
+            for k in 0..3 {
+                let v = tri[k] as usize;
+                circ[v] = circ[v].max(r);
+                if !sel.is_hole(i) {
+                    for o in [tri[(k + 1) % 3], tri[(k + 2) % 3]] {
+                        edge[v] = edge[v].max(angle(dirs[v], dirs[o as usize]));
+                    }
+                }
+            }
+        }
+        let mut vertex_of = vec![None; set.cameras.len()];
+        for (v, &c) in sel.vertex_camera().iter().enumerate() {
+            if let Some(slot) = vertex_of.get_mut(c as usize) {
+                *slot = Some(v);
+            }
+        }
+        let cameras = set
+            .cameras
+            .iter()
+            .zip(pack.images())
+            .enumerate()
+            .map(|(i, (c, e))| {
+                let v = vertex_of[i]?;
+                if e.bbox.w == 0 || e.bbox.h == 0 {
+                    return None;
+                }
+                let k = set.intrinsics_of(i);
+                let x0 = f64::from(e.bbox.x0) * t - 1.0;
+                let y0 = f64::from(e.bbox.y0) * t - 1.0;
+                let x1 = (f64::from(e.bbox.x0 + e.bbox.w) * t).min(f64::from(e.width)) + 1.0;
+                let y1 = (f64::from(e.bbox.y0 + e.bbox.h) * t).min(f64::from(e.height)) + 1.0;
+                let dir = |px: f64, py: f64| {
+                    let n = (DVec2::new(px, py) - k.principal_px) / k.focal_px;
+                    (c.right * n.x + c.down * n.y + c.forward).normalize().as_vec3()
+                };
+                // 1 % and 10⁻⁶ rad of margin over the exact radii (rounding at triangle edges).
+                let grow = |r: f64| r * 1.01 + 1e-6;
+                Some(CameraCone {
+                    corners: [dir(x0, y0), dir(x1, y0), dir(x1, y1), dir(x0, y1)],
+                    vertex: dirs[v],
+                    rho: [grow(circ[v]), grow(max_gap), grow(edge[v])],
+                })
+            })
+            .collect();
+        LitDirections {
+            cameras,
+            sphere: (set.sphere.centre_m, set.sphere.radius_m),
+        }
+    }
+
+    /// The bounding polygon of a perspective view from `eye` (luminaire frame, m) in `mode` for the
+    /// selectable `cameras`, as a triangle list (luminaire frame, m) on the plane through the capture
+    /// centre facing the eye; `clip_from_local` is the draw's matrix. An empty list: no pixel can be
+    /// lit. `None` when the bound does not apply (a direction at or behind the eye's plane, a cap
+    /// around the eye, a plane seen edge-on): draw the box instead.
+    pub fn bound(
+        &self,
+        cameras: &[u32],
+        mode: SelectionMode,
+        clip_from_local: Mat4,
+        eye: Vec3,
+    ) -> Option<Vec<[f32; 3]>> {
+        let (centre, r_s) = self.sphere;
+        let e = eye.as_dvec3();
+        let n = (e - centre).normalize_or_zero();
+        if n == DVec3::ZERO {
+            return None;
+        }
+        let m = match mode {
+            SelectionMode::Nearest => 0,
+            SelectionMode::Idw4 => 1,
+            SelectionMode::Continuous => 2,
+        };
+        // Lines leave the eye towards their first hit from outside the sphere, away from it inside.
+        let sign = if (e - centre).length() > r_s { 1.0 } else { -1.0 };
+        let project = |d: DVec3| -> Option<Vec2> {
+            let h = clip_from_local * Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0);
+            (h.w > 1e-6 * h.truncate().length()).then(|| Vec2::new(h.x / h.w, h.y / h.w))
+        };
+        let mut pts: Vec<Vec2> = Vec::with_capacity(cameras.len() * 8);
+        for &c in cameras {
+            let Some(Some(cone)) = self.cameras.get(c as usize) else {
+                continue;
+            };
+            // E_j: the octagon around the cone to the cap's chord ball.
+            let q = centre + cone.vertex * r_s;
+            let to_q = q - e;
+            let dist = to_q.length();
+            let chord = 2.0 * r_s * (0.5 * cone.rho[m]).min(std::f64::consts::FRAC_PI_2).sin();
+            if chord >= 0.95 * dist {
+                return None;
+            }
+            let axis = to_q / dist * sign;
+            let tan_g = (chord / dist).asin().tan() / (std::f64::consts::PI / 8.0).cos();
+            if tan_g > 5.0 {
+                return None;
+            }
+            let (b1, b2) = orthonormal(axis);
+            let mut oct = Vec::with_capacity(8);
+            for k in 0..8 {
+                let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+                oct.push(project(axis + (b1 * a.cos() + b2 * a.sin()) * tan_g)?);
+            }
+            let mut quad = Vec::with_capacity(4);
+            for d in cone.corners {
+                quad.push(project(d.as_dvec3())?);
+            }
+            pts.extend(clip_convex(&oct, &quad));
+        }
+        let hull = convex_hull(pts.into_iter().map(|p| (p.x, p.y, ())).collect());
+        if hull.len() < 3 {
+            return Some(Vec::new());
+        }
+        // Each hull vertex back onto the plane through the centre facing the eye.
+        let local_from_clip = clip_from_local.inverse();
+        let dist = (centre - e).dot(n);
+        let mut on_plane = Vec::with_capacity(hull.len());
+        for (x, y, ()) in hull {
+            let p = local_from_clip * Vec4::new(x, y, 0.5, 1.0);
+            let d = (p.truncate() / p.w).as_dvec3() - e;
+            let dn = d.dot(n);
+            if !(dn < -1e-9 * d.length()) {
+                return None;
+            }
+            on_plane.push((e + d * (dist / dn)).as_vec3().to_array());
+        }
+        let mut out = Vec::with_capacity((on_plane.len() - 2) * 3);
+        for i in 1..on_plane.len() - 1 {
+            out.extend([on_plane[0], on_plane[i], on_plane[i + 1]]);
+        }
+        Some(out)
+    }
+}
+
+fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
+    let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
+    let x = a.cross(t).normalize();
+    (x, a.cross(x))
+}
+
+/// The intersection of two convex polygons (either orientation): `subject` clipped by each edge of
+/// `clip` (Sutherland–Hodgman).
+fn clip_convex(subject: &[Vec2], clip: &[Vec2]) -> Vec<Vec2> {
+    let area: f32 = (0..clip.len())
+        .map(|i| clip[i].perp_dot(clip[(i + 1) % clip.len()]))
+        .sum();
+    let orient = if area >= 0.0 { 1.0 } else { -1.0 };
+    let mut out = subject.to_vec();
+    for i in 0..clip.len() {
+        let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
+        let side = |p: Vec2| orient * (b - a).perp_dot(p - a);
+        let input = std::mem::take(&mut out);
+        for k in 0..input.len() {
+            let (p, q) = (input[k], input[(k + 1) % input.len()]);
+            let (sp, sq) = (side(p), side(q));
+            if sp >= 0.0 {
+                out.push(p);
+            }
+            if (sp >= 0.0) != (sq >= 0.0) {
+                out.push(p + (q - p) * (sp / (sp - sq)));
+            }
+        }
+        if out.is_empty() {
+            break;
+        }
+    }
+    out
+}
+
+/// Convex hull (Andrew's monotone chain) of 2D points carrying a payload, counter-clockwise, without
+/// collinear points.
+fn convex_hull<T: Copy>(mut p: Vec<(f32, f32, T)>) -> Vec<(f32, f32, T)> {
+    p.retain(|q| q.0.is_finite() && q.1.is_finite());
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    if p.len() < 3 {
+        return p;
+    }
+    let cross = |o: &(f32, f32, T), a: &(f32, f32, T), b: &(f32, f32, T)| {
+        f64::from(a.0 - o.0) * f64::from(b.1 - o.1) - f64::from(a.1 - o.1) * f64::from(b.0 - o.0)
+    };
+    let mut h: Vec<(f32, f32, T)> = Vec::with_capacity(2 * p.len());
+    // Lower chain on the way right.
+    for q in &p {
+        while h.len() >= 2 && cross(&h[h.len() - 2], &h[h.len() - 1], q) <= 0.0 {
+            h.pop();
+        }
+        h.push(*q);
+    }
+    // Upper chain on the way back, never popping into the lower one.
+    let floor = h.len() + 1;
+    for q in p.iter().rev().skip(1) {
+        while h.len() >= floor && cross(&h[h.len() - 2], &h[h.len() - 1], q) <= 0.0 {
+            h.pop();
+        }
+        h.push(*q);
+    }
+    h.pop();
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn clipping_two_squares() {
+        let a = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(2.0, 0.0),
+            Vec2::new(2.0, 2.0),
+            Vec2::new(0.0, 2.0),
+        ];
+        // Clockwise clip polygon: orientation must not matter.
+        let b = [
+            Vec2::new(1.0, 1.0),
+            Vec2::new(1.0, 3.0),
+            Vec2::new(3.0, 3.0),
+            Vec2::new(3.0, 1.0),
+        ];
+        let c = clip_convex(&a, &b);
+        let area: f32 = (0..c.len()).map(|i| c[i].perp_dot(c[(i + 1) % c.len()])).sum::<f32>() * 0.5;
+        assert!((area.abs() - 1.0).abs() < 1e-5, "{c:?}");
+        let far = [Vec2::new(5.0, 5.0), Vec2::new(6.0, 5.0), Vec2::new(6.0, 6.0)];
+        assert!(clip_convex(&a, &far).is_empty());
+    }
+
+    #[test]
+    fn hull_of_a_square_with_inner_points() {
+        let mut p = vec![(0.0, 0.0, 0), (1.0, 0.0, 1), (1.0, 1.0, 2), (0.0, 1.0, 3)];
+        p.push((0.5, 0.5, 4));
+        p.push((0.2, 0.7, 5));
+        p.push((0.5, 0.0, 6)); // on an edge
+        let h = convex_hull(p);
+        let ids: Vec<i32> = h.iter().map(|q| q.2).collect();
+        assert_eq!(ids.len(), 4, "{ids:?}");
+        for id in [0, 1, 2, 3] {
+            assert!(ids.contains(&id), "{ids:?}");
+        }
+        // Counter-clockwise: positive area.
+        let area: f32 = (0..h.len())
+            .map(|i| {
+                let (a, b) = (h[i], h[(i + 1) % h.len()]);
+                a.0 * b.1 - b.0 * a.1
+            })
+            .sum();
+        assert!(area > 0.0);
+    }
+
+    #[test]
+    fn hull_of_degenerate_input() {
+        assert!(convex_hull::<u8>(vec![]).is_empty());
+        assert_eq!(convex_hull(vec![(0.0, 0.0, 0u8), (1.0, 1.0, 1)]).len(), 2);
+        assert_eq!(
+            convex_hull(vec![(0.0, 0.0, 0u8), (1.0, 1.0, 1), (2.0, 2.0, 2)]).len(),
+            2
+        );
+        assert_eq!(convex_hull(vec![(f32::NAN, 0.0, 0u8)]).len(), 0);
+    }
+}
