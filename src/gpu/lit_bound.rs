@@ -180,7 +180,8 @@ impl LitDirections {
             let p = local_from_clip * Vec4::new(x, y, 0.5, 1.0);
             let d = (p.truncate() / p.w).as_dvec3() - e;
             let dn = d.dot(n);
-            if !(dn < -1e-9 * d.length()) {
+            // (NaN included.)
+            if dn.is_nan() || dn >= -1e-9 * d.length() {
                 return None;
             }
             on_plane.push((e + d * (dist / dn)).as_vec3().to_array());
