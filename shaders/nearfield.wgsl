@@ -135,33 +135,28 @@ fn pool_word(chunk: u32, word: u32) -> u32 {
 }
 
 struct Cam {
-    pos: vec3<f32>,
-    right: vec3<f32>,
-    down: vec3<f32>,
-    forward: vec3<f32>,
+    // Projection rows: (h.x, h.y, h.z) = M · x + t for a point x (luminaire frame, m), M · v for a
+    // direction v; the pixel (pixel centres at +0.5) is h.xy / h.z, in front of the camera when h.z > 0.
+    // M = (fx · right + cx · forward, fy · down + cy · forward, forward), t = −M · position.
+    m0: vec4<f32>,
+    m1: vec4<f32>,
+    m2: vec4<f32>,
     size: vec2<u32>,
-    focal: vec2<f32>,
-    principal: vec2<f32>,
     table: u32,
     bbox: vec4<u32>,
 };
 
+// Per camera 6 × vec4<u32>: the three projection rows (f32 bits) | tile box x0, y0, w, h (tiles) |
+// width, height, table offset, unused | position xyz (f32 bits; the visibility test), unused.
 fn camera(i: u32) -> Cam {
-    let a = cameras[6u * i];
-    let b = cameras[6u * i + 1u];
-    let c = cameras[6u * i + 2u];
-    let d = cameras[6u * i + 3u];
-    let e = cameras[6u * i + 4u];
     var cam: Cam;
-    cam.pos = bitcast<vec3<f32>>(a.xyz);
-    cam.right = bitcast<vec3<f32>>(b.xyz);
-    cam.down = bitcast<vec3<f32>>(c.xyz);
-    cam.forward = bitcast<vec3<f32>>(d.xyz);
-    cam.size = vec2<u32>(a.w, b.w);
-    cam.focal = vec2<f32>(bitcast<f32>(c.w), bitcast<f32>(d.w));
-    cam.principal = bitcast<vec2<f32>>(e.xy);
+    cam.m0 = bitcast<vec4<f32>>(cameras[6u * i]);
+    cam.m1 = bitcast<vec4<f32>>(cameras[6u * i + 1u]);
+    cam.m2 = bitcast<vec4<f32>>(cameras[6u * i + 2u]);
+    cam.bbox = cameras[6u * i + 3u];
+    let e = cameras[6u * i + 4u];
+    cam.size = e.xy;
     cam.table = e.z;
-    cam.bbox = cameras[6u * i + 5u];
     return cam;
 }
 
@@ -238,18 +233,13 @@ fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
 // Luminance seen by camera `ci` at surface point p (proxy mode) or along direction v (bounding mode).
 fn camera_luminance(ci: u32, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
     let cam = camera(ci);
-    var x: vec3<f32>;
-    if (proxy) {
-        x = p - cam.pos;
-    } else {
-        x = v;
-    }
-    let c = vec3<f32>(dot(x, cam.right), dot(x, cam.down), dot(x, cam.forward));
-    if (c.z <= 0.0) {
+    // A point (w = 1) in proxy mode, a direction (w = 0) without.
+    let x = select(vec4<f32>(v, 0.0), vec4<f32>(p, 1.0), proxy);
+    let h = vec3<f32>(dot(cam.m0, x), dot(cam.m1, x), dot(cam.m2, x));
+    if (h.z <= 0.0) {
         return 0.0;
     }
-    let px = cam.principal + cam.focal * c.xy / c.z;
-    return sample_camera(cam, px, proxy);
+    return sample_camera(cam, h.xy / h.z, proxy);
 }
 
 fn cell_of(u: vec3<f32>) -> u32 {
@@ -534,7 +524,7 @@ fn shade(in: VsOut) -> Shaded {
         for (var i = 0u; i < n_cams; i = i + 1u) {
             if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
                 n_valid = n_valid + 1u;
-                blocked[i] = occluded(p, bitcast<vec3<f32>>(cameras[6u * sel.cam[i]].xyz));
+                blocked[i] = occluded(p, bitcast<vec3<f32>>(cameras[6u * sel.cam[i] + 5u].xyz));
                 n_blocked = n_blocked + select(0u, 1u, blocked[i]);
             }
         }

@@ -278,9 +278,9 @@ fn bounding_polygon_renders_what_the_box_renders() {
             let f = |b: &[u8]| -> Vec<f32> { bytemuck::cast_slice::<u8, f32>(b).to_vec() };
             let (ca, cb) = (f(&frames[0].0), f(&frames[1].0));
             let (da, db) = (f(&frames[0].1), f(&frames[1].1));
-            // A few pixels may differ more: continuous mode switches from the log to the linear blend
-            // where a camera's sample becomes exactly dark, and rounding can move a silhouette pixel's
-            // sample across that.
+            // A few pixels may differ more: rounding can move a line across a selection boundary
+            // (nearest and idw4 jump there), or a sample across the point where continuous mode
+            // switches from the log to the linear blend (a camera's sample becoming exactly dark).
             let (mut mask, mut off, mut depth) = (0, 0, 0f32);
             for i in 0..db.len() {
                 let (x, y) = (ca[4 * i], cb[4 * i]);
@@ -292,7 +292,7 @@ fn bounding_polygon_renders_what_the_box_renders() {
                 }
             }
             assert!(
-                mask == 0 && off <= 1 + lit / 500 && depth < 1e-6,
+                mask == 0 && off <= 2 + lit / 100 && depth < 1e-6,
                 "eye {e} {eye}, {mode:?}: {mask} px lit in one frame only, {off} differ by > 0.2 %, \
                  depths by up to {depth:e} ({lit} lit)"
             );

@@ -599,12 +599,19 @@ impl NearfieldPass {
                 let k = set.intrinsics_of(i);
                 let f = |v: f64| (v as f32).to_bits();
                 let p = c.position_m;
-                cams.push([f(p.x), f(p.y), f(p.z), e.width]);
-                cams.push([f(c.right.x), f(c.right.y), f(c.right.z), e.height]);
-                cams.push([f(c.down.x), f(c.down.y), f(c.down.z), f(k.focal_px.x)]);
-                cams.push([f(c.forward.x), f(c.forward.y), f(c.forward.z), f(k.focal_px.y)]);
-                cams.push([f(k.principal_px.x), f(k.principal_px.y), e.table_offset as u32, 0]);
+                // The projection as one 3×4 matrix: (h.x, h.y, h.z) = M · x + t for a point x, M · v
+                // for a direction; pixel = h.xy / h.z (see `Cam` in the shader).
+                let rows = [
+                    c.right * k.focal_px.x + c.forward * k.principal_px.x,
+                    c.down * k.focal_px.y + c.forward * k.principal_px.y,
+                    c.forward,
+                ];
+                for m in rows {
+                    cams.push([f(m.x), f(m.y), f(m.z), f(-m.dot(p))]);
+                }
                 cams.push([e.bbox.x0, e.bbox.y0, e.bbox.w, e.bbox.h]);
+                cams.push([e.width, e.height, e.table_offset as u32, 0]);
+                cams.push([f(p.x), f(p.y), f(p.z), 0]);
             }
             let g = selection.gpu_data();
             let mut lists: Vec<u32> = Vec::new();
