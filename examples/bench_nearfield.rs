@@ -367,7 +367,13 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                 },
                 a.runs,
             )?;
-            modes.push(json!({"mode": label, "median_ms": m, "runs_ms": runs}));
+            let px = target.read(&r.ctx, lumiview::gpu::Attachment::Color)?;
+            let lit = px
+                .chunks_exact(16)
+                .filter(|c| f32::from_le_bytes([c[12], c[13], c[14], c[15]]) > 0.0)
+                .count();
+            modes.push(json!({"mode": label, "median_ms": m, "runs_ms": runs,
+                              "lit_fraction": lit as f64 / f64::from(w * h)}));
         }
         // The frame's fixed cost: the same render call with the luminaire's instance removed.
         r.remove_instance(inst)?;

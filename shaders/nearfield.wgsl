@@ -108,6 +108,11 @@ override SLOTS_PER_CHUNK: u32 = 496u;
 override SELECTION: u32 = 2u;
 override PROXY: bool = false;
 
+// Continuous mode without a proxy, drawn as the triangle raster (src/gpu/lit_bound.rs): each polygon
+// covers one selection triangle's region (vertex attribute `tri`) and the fragment takes that
+// triangle's weights directly, without the cell search.
+override TRIANGLES: bool = false;
+
 // The pool chunk of pack chunk `c` (EMPTY: not resident).
 fn pool_chunk(c: u32) -> u32 {
     if (IDENTITY_MAP) {
@@ -299,6 +304,31 @@ fn select_continuous(u: vec3<f32>, cell: u32) -> Selected {
     return out;
 }
 
+// The continuous weights of triangle t at u (as select_continuous), or nothing (cam.x = EMPTY) when u
+// lies outside t by more than a hair of tolerance: that line belongs to the neighbouring triangle,
+// whose polygon covers it too (the polygons overlap a little, so no line falls between two).
+fn select_in_triangle(u: vec3<f32>, t: u32) -> Selected {
+    var out: Selected;
+    out.cam = vec4<u32>(EMPTY);
+    out.w = vec4<f32>(0.0);
+    let a = tris[3u * t];
+    let b = tris[3u * t + 1u];
+    let c = tris[3u * t + 2u];
+    let e = vec3<f32>(dot(u, a.xyz), dot(u, b.xyz), dot(u, c.xyz));
+    let s = abs(e.x) + abs(e.y) + abs(e.z);
+    if (min(e.x, min(e.y, e.z)) < -1e-5 * s) {
+        return out;
+    }
+    let ep = max(e, vec3<f32>(0.0));
+    let sum = ep.x + ep.y + ep.z;
+    if (sum <= 0.0) {
+        return out;
+    }
+    out.cam = vec4<u32>(bitcast<u32>(a.w), bitcast<u32>(b.w), bitcast<u32>(c.w), EMPTY);
+    out.w = vec4<f32>(ep / sum, 0.0);
+    return out;
+}
+
 // Nearest (k = 1) or inverse-distance over the 4 nearest (k = 4), great-circle distances.
 fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
     var out: Selected;
@@ -442,6 +472,8 @@ fn occluded(origin: vec3<f32>, dest: vec3<f32>) -> bool {
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local_pos: vec3<f32>,
+    // The selection triangle of the triangle raster (TRIANGLES), else EMPTY.
+    @location(1) @interpolate(flat) tri: u32,
 };
 
 @vertex
@@ -449,6 +481,17 @@ fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
     var out: VsOut;
     out.clip = draw.clip_from_local * vec4<f32>(pos, 1.0);
     out.local_pos = pos;
+    out.tri = EMPTY;
+    return out;
+}
+
+// The frame's bounding polygons (src/gpu/lit_bound.rs): a point and its selection triangle.
+@vertex
+fn vs_polygon(@location(0) pos: vec3<f32>, @location(1) tri: u32) -> VsOut {
+    var out: VsOut;
+    out.clip = draw.clip_from_local * vec4<f32>(pos, 1.0);
+    out.local_pos = pos;
+    out.tri = tri;
     return out;
 }
 
@@ -492,12 +535,16 @@ fn shade(in: VsOut) -> Shaded {
     let t = -b - sqrt(disc);
     let q = p + t * v;
     let u = normalize(q - s);
-    let cell = cell_of(u);
     var sel: Selected;
-    if (SELECTION == 2u) {
-        sel = select_continuous(u, cell);
+    if (TRIANGLES) {
+        sel = select_in_triangle(u, in.tri);
+        if (sel.cam.x == EMPTY) {
+            return out;
+        }
+    } else if (SELECTION == 2u) {
+        sel = select_continuous(u, cell_of(u));
     } else {
-        sel = select_nearest(u, cell, SELECTION == 1u);
+        sel = select_nearest(u, cell_of(u), SELECTION == 1u);
     }
     // Cameras the mode can select: 1 (nearest), 4 (idw4), 3 (continuous).
     let n_cams = select(select(3u, 4u, SELECTION == 1u), 1u, SELECTION == 0u);

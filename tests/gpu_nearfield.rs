@@ -250,15 +250,19 @@ fn bounding_polygon_renders_what_the_box_renders() {
         lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
         _ => panic!("not a near-field luminaire"),
     };
-    let (mut lit_views, mut polygons) = (0, 0);
+    let (mut lit_views, mut polygons, mut rasters) = (0, 0, 0);
     for (e, eye) in eyes.iter().enumerate() {
         // The content (about 0.3 m across) framed.
         let fov = 2.0 * (0.3 / eye.length()).atan().to_degrees();
         let (cam, k) = eye_camera(*eye, 128, fov);
         for mode in [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous] {
             let hc = HostCamera::from_pinhole(&cam, &k, 0.01, 20.0);
-            let polygon = lum.bounding_polygon(hc.eye_in(Mat4::IDENTITY), hc.clip_from_world(), mode);
-            polygons += usize::from(polygon.is_some_and(|p| !p.is_empty()));
+            let polygon = lum.bounding_polygon(hc.eye_in(Mat4::IDENTITY), hc.clip_from_world(), mode, (128, 128));
+            if let Some((p, raster)) = polygon {
+                polygons += usize::from(!p.is_empty());
+                rasters += usize::from(raster);
+                assert_eq!(raster, mode == SelectionMode::Continuous, "eye {e}, {mode:?}");
+            }
             let mut frames = Vec::new();
             for id in [tight, boxed] {
                 let inst = r.add_instance(id, Mat4::IDENTITY).unwrap();
@@ -301,6 +305,7 @@ fn bounding_polygon_renders_what_the_box_renders() {
     assert!(lit_views >= 12, "only {lit_views} views show the luminaire");
     // The far and grazing eyes in every mode at least (the polygon, not the box, was compared).
     assert!(polygons >= 12, "only {polygons} views drew the bounding polygon");
+    assert!(rasters >= 4, "only {rasters} continuous views drew the triangle raster");
     gpu_common::assert_no_validation_messages();
 }
 

@@ -194,6 +194,189 @@ impl LitDirections {
     }
 }
 
+/// A vertex of a frame's bounding polygons: a point (luminaire frame, m) and, in the continuous
+/// raster, the selection triangle whose region it covers ([`EMPTY_TRIANGLE`] in the hull polygon).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct PolygonVertex {
+    /// Position (m, luminaire frame).
+    pub pos: [f32; 3],
+    /// Selection triangle.
+    pub tri: u32,
+}
+
+/// The `tri` of a hull polygon's vertices.
+pub const EMPTY_TRIANGLE: u32 = u32::MAX;
+
+/// Screen geometry of one view: NDC ↔ pixels, the sign that puts first sphere hits in front.
+struct Screen {
+    clip_from_local: Mat4,
+    half: Vec2,
+    /// 1 from outside the sphere; −1 from inside, where a line's first hit lies behind the eye.
+    sign: f32,
+}
+
+impl Screen {
+    /// Pixel position (from the centre) of a point (w = 1) or direction (w = 0); `None` when it is not
+    /// in front of the eye.
+    fn px(&self, x: Vec4, sign: f32) -> Option<Vec2> {
+        let h = self.clip_from_local * x * sign;
+        (h.w > 1e-6 * h.truncate().length()).then(|| Vec2::new(h.x / h.w, h.y / h.w) * self.half)
+    }
+}
+
+impl LitDirections {
+    /// The continuous-mode raster of a perspective view from `eye` (outside the content ball of radius
+    /// `content_m`) for a `viewport` of pixels: the selection triangles whose regions the view's lines
+    /// reach (`triangles`, from the selection's cell lists), each drawn where its lines can be lit.
+    ///
+    /// A pixel shows triangle T's blend when its line's first hit on the sphere lies in T. On the
+    /// screen that region is T's three sphere points joined by the images of great-circle arcs, which
+    /// bow off the straight edges by at most the arcs' sagitta; each triangle is grown by that plus
+    /// one pixel, cut to the content ball's silhouette (an octagon around its cone: lines that miss the
+    /// ball are discarded anyway) and to the hull of its cameras' cones D (a line outside all three
+    /// is dark), and placed on the plane through the centre facing the eye. The shader keeps a
+    /// fragment only where the line's first hit lies in its own triangle (a small tolerance: a hair of
+    /// overlap with the neighbour, never a crack), so each pixel is shaded by about one triangle and
+    /// needs no search. `None`: a point or direction involved is not in front of the eye; draw the
+    /// hull polygon or the box.
+    pub fn continuous_raster(
+        &self,
+        sel: &Selection,
+        triangles: &[u32],
+        clip_from_local: Mat4,
+        eye: Vec3,
+        content_m: f64,
+        viewport: (u32, u32),
+    ) -> Option<Vec<PolygonVertex>> {
+        let (centre, r_s) = self.sphere;
+        let e = eye.as_dvec3();
+        let to_c = centre - e;
+        let dist_c = to_c.length();
+        if dist_c <= content_m * 1.0001 {
+            return None;
+        }
+        let screen = Screen {
+            clip_from_local,
+            half: Vec2::new(viewport.0 as f32, viewport.1 as f32) * 0.5,
+            sign: if (e - centre).length() > r_s { 1.0 } else { -1.0 },
+        };
+        let dir4 = |d: DVec3| Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0);
+        let pt4 = |q: DVec3| Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0);
+        // The content ball's silhouette: an octagon around its cone from the eye.
+        let axis = to_c / dist_c;
+        let tan_b = (content_m / dist_c).asin().tan() / (std::f64::consts::PI / 8.0).cos();
+        if tan_b > 5.0 {
+            return None;
+        }
+        let (b1, b2) = orthonormal(axis);
+        let mut ball = Vec::with_capacity(8);
+        for k in 0..8 {
+            let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+            ball.push(screen.px(dir4(axis + (b1 * a.cos() + b2 * a.sin()) * tan_b), 1.0)?);
+        }
+        let dirs = sel.vertex_directions();
+        let cams = sel.vertex_camera();
+        let local_from_clip = clip_from_local.inverse();
+        let n = -axis;
+        let mut out = Vec::new();
+        for &t in triangles {
+            let ti = t as usize;
+            if sel.is_hole(ti) || sel.is_folded(ti) {
+                continue;
+            }
+            let Some(tri) = sel.triangles().get(ti) else {
+                continue;
+            };
+            // The hull of the cameras' cones (none lit: the whole triangle is dark).
+            let mut corners = Vec::with_capacity(12);
+            for &v in tri {
+                if let Some(Some(cone)) = cams.get(v as usize).and_then(|&c| self.cameras.get(c as usize)) {
+                    for d in cone.corners {
+                        let p = screen.px(dir4(d.as_dvec3()), 1.0)?;
+                        corners.push((p.x, p.y, ()));
+                    }
+                }
+            }
+            let d_hull: Vec<Vec2> = convex_hull(corners)
+                .into_iter()
+                .map(|(x, y, ())| Vec2::new(x, y))
+                .collect();
+            if d_hull.len() < 3 {
+                continue;
+            }
+            // The triangle's sphere points and the arcs' sagitta, in pixels.
+            let q = tri.map(|v| centre + dirs[v as usize] * r_s);
+            let mut p = [Vec2::ZERO; 3];
+            for k in 0..3 {
+                p[k] = screen.px(pt4(q[k]), screen.sign)?;
+            }
+            let mut grow = 1.0f32;
+            for k in 0..3 {
+                let (a, b) = (dirs[tri[k] as usize], dirs[tri[(k + 1) % 3] as usize]);
+                let arc = screen.px(pt4(centre + (a + b).normalize() * r_s), screen.sign)?;
+                let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
+                grow = grow.max(1.0 + (arc - chord).length() * 1.5);
+            }
+            let Some(grown) = grow_triangle(p, grow) else {
+                continue;
+            };
+            let poly = clip_convex(&clip_convex(&grown, &ball), &d_hull);
+            if poly.len() < 3 {
+                continue;
+            }
+            // Back onto the plane through the centre facing the eye (every line here crosses the
+            // ball, so in front of the eye).
+            let mut on_plane = Vec::with_capacity(poly.len());
+            for v in poly {
+                let ndc = v / screen.half;
+                let h = local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
+                let d = (h.truncate() / h.w).as_dvec3() - e;
+                let dn = d.dot(n);
+                if dn.is_nan() || dn >= -1e-9 * d.length() {
+                    return None;
+                }
+                on_plane.push((e + d * (-dist_c / dn)).as_vec3().to_array());
+            }
+            for i in 1..on_plane.len() - 1 {
+                for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
+                    out.push(PolygonVertex { pos, tri: t });
+                }
+            }
+        }
+        Some(out)
+    }
+}
+
+/// A triangle (pixels) with each edge moved `d` pixels outwards; `None` when degenerate.
+fn grow_triangle(p: [Vec2; 3], d: f32) -> Option<Vec<Vec2>> {
+    let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
+    if area.is_nan() || area.abs() <= 1e-6 {
+        return None;
+    }
+    let s = area.signum();
+    // Edge k from p[k] to p[k+1], outward normal.
+    let line = |k: usize| {
+        let (a, b) = (p[k], p[(k + 1) % 3]);
+        let t = (b - a).normalize();
+        let nrm = Vec2::new(t.y, -t.x) * s;
+        (a + nrm * d, t)
+    };
+    let mut out = Vec::with_capacity(3);
+    for k in 0..3 {
+        // Vertex k+1 is where edge k and edge k+1 meet.
+        let (a0, t0) = line(k);
+        let (a1, t1) = line((k + 1) % 3);
+        let den = t0.perp_dot(t1);
+        if den.abs() < 1e-6 {
+            return None;
+        }
+        let u = (a1 - a0).perp_dot(t1) / den;
+        out.push(a0 + t0 * u);
+    }
+    Some(out)
+}
+
 fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
     let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
     let x = a.cross(t).normalize();

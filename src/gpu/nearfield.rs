@@ -16,10 +16,10 @@ use glam::{DVec3, Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
-use super::lit_bound::LitDirections;
+use super::lit_bound::{LitDirections, PolygonVertex, EMPTY_TRIANGLE};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::slots::{DrawSlots, SLOT};
-use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, POSITION_LAYOUT};
+use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, TargetDesc, POSITION_LAYOUT};
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::pack::Pack;
@@ -231,16 +231,68 @@ impl NearfieldLuminaire {
             && (eye.truncate().as_dvec3() - self.sphere.0).length() > 1.01 * self.content_radius_m
     }
 
-    /// The bounding polygon ([`crate::gpu::lit_bound`]) the pass draws for an instance in `mode`
-    /// without its proxy, seen from `eye` (luminaire frame, as in [`Self::cameras_for_view`]) through
-    /// `clip_from_local`: a triangle list (luminaire frame, m), empty when no pixel can be lit; `None`
-    /// where the pass draws the content ball's box.
-    pub fn bounding_polygon(&self, eye: Vec4, clip_from_local: Mat4, mode: SelectionMode) -> Option<Vec<[f32; 3]>> {
-        if !self.polygon_applies(eye) {
-            return None;
+    /// What the pass draws for an instance in `mode` without its proxy, seen from `eye` (luminaire
+    /// frame, as in [`Self::cameras_for_view`]) through `clip_from_local` into a `viewport` of pixels:
+    /// the bounding polygons ([`crate::gpu::lit_bound`]) as a triangle list, with `true` when they
+    /// are the continuous raster (else the hull); an empty list when no pixel can be lit; `None` where
+    /// the pass draws the content ball's box.
+    pub fn bounding_polygon(
+        &self,
+        eye: Vec4,
+        clip_from_local: Mat4,
+        mode: SelectionMode,
+        viewport: (u32, u32),
+    ) -> Option<(Vec<PolygonVertex>, bool)> {
+        let applies = self.polygon_applies(eye);
+        applies
+            .then(|| self.view_geometry(eye, clip_from_local, mode, viewport, applies).1)
+            .flatten()
+    }
+
+    /// The cameras a view can select, and (`polygon`: where it applies) its bounding polygons.
+    #[allow(clippy::type_complexity)]
+    fn view_geometry(
+        &self,
+        eye: Vec4,
+        clip_from_local: Mat4,
+        mode: SelectionMode,
+        viewport: (u32, u32),
+        polygon: bool,
+    ) -> (Vec<u32>, Option<(Vec<PolygonVertex>, bool)>) {
+        let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
+        let cams = self.selection.cameras_of_cells(mode, cells.iter().copied());
+        if !polygon {
+            return (cams, None);
         }
-        let cams = self.cameras_for_view(eye, mode);
-        self.lit.bound(&cams, mode, clip_from_local, eye.truncate())
+        // Continuous: the triangle raster; otherwise, or where it does not apply, the hull.
+        if mode == SelectionMode::Continuous {
+            let mut tris: Vec<u32> = cells
+                .iter()
+                .flat_map(|&c| self.selection.cell_candidates(SelectionMode::Continuous, c))
+                .copied()
+                .collect();
+            tris.sort_unstable();
+            tris.dedup();
+            let raster = self.lit.continuous_raster(
+                &self.selection,
+                &tris,
+                clip_from_local,
+                eye.truncate(),
+                self.content_radius_m,
+                viewport,
+            );
+            if let Some(r) = raster {
+                return (cams, Some((r, true)));
+            }
+        }
+        let hull = self.lit.bound(&cams, mode, clip_from_local, eye.truncate()).map(|p| {
+            let v = p.into_iter().map(|pos| PolygonVertex {
+                pos,
+                tri: EMPTY_TRIANGLE,
+            });
+            (v.collect(), false)
+        });
+        (cams, hull)
     }
 
     fn make_resident(&self, ctx: &GpuContext, cameras: &[u32]) -> Result<(), GpuError> {
@@ -385,7 +437,20 @@ struct PipelineKey {
     /// Faces culled: none for a proxy, back faces of the bounding box from outside it, front faces
     /// from inside.
     cull: Option<wgpu::Face>,
+    /// Drawing the frame's polygons (vertex layout [`POLYGON_LAYOUT`], entry `vs_polygon`).
+    polygon: bool,
+    /// The shader's `TRIANGLES`: the polygons are the continuous raster.
+    triangles: bool,
 }
+
+const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
+
+/// [`PolygonVertex`]: position and selection triangle.
+const POLYGON_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<PolygonVertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &POLYGON_ATTRIBUTES,
+};
 
 /// Pipelines and layouts of the near-field pass.
 #[derive(Debug)]
@@ -407,8 +472,9 @@ enum DrawGeometry {
     Proxy,
     /// The box around the content ball.
     Box,
-    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]).
-    Polygon { first: u32, count: u32 },
+    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]):
+    /// the continuous raster (`triangles`, each vertex naming its selection triangle) or the hull.
+    Polygon { first: u32, count: u32, triangles: bool },
 }
 
 /// One prepared frame of the pass: draws whose uniforms are written.
@@ -852,9 +918,9 @@ impl NearfieldPass {
                 layout: Some(&self.pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &self.module,
-                    entry_point: Some("vs_main"),
+                    entry_point: Some(if key.polygon { "vs_polygon" } else { "vs_main" }),
                     compilation_options: Default::default(),
-                    buffers: &[Some(POSITION_LAYOUT)],
+                    buffers: &[Some(if key.polygon { POLYGON_LAYOUT } else { POSITION_LAYOUT })],
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
@@ -876,6 +942,7 @@ impl NearfieldPass {
                             ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
                             ("SELECTION", f64::from(key.selection)),
                             ("PROXY", f64::from(u8::from(key.proxy))),
+                            ("TRIANGLES", f64::from(u8::from(key.triangles))),
                             ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
                             ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
                             ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
@@ -901,8 +968,7 @@ impl NearfieldPass {
     pub fn prepare(
         &mut self,
         ctx: &GpuContext,
-        color: ColorFormat,
-        depth: DepthFormat,
+        target: &TargetDesc,
         camera: &HostCamera,
         options: &RenderOptions,
         instances: &[(Arc<NearfieldLuminaire>, Mat4, NearfieldSettings)],
@@ -910,6 +976,7 @@ impl NearfieldPass {
         if instances.is_empty() {
             return Ok(NearfieldFrame::default());
         }
+        let (color, depth, viewport) = (target.color, target.depth, (target.width, target.height));
         // Residency: the union over instances, per luminaire.
         let mut per_lum: Vec<(Arc<NearfieldLuminaire>, Vec<u32>)> = Vec::new();
         let mut slots: Vec<DrawUniform> = Vec::with_capacity(instances.len());
@@ -920,21 +987,16 @@ impl NearfieldPass {
         } else {
             0.0
         };
-        let mut polygons: Vec<[f32; 3]> = Vec::new();
+        let mut polygons: Vec<PolygonVertex> = Vec::new();
         for (lum, model, settings) in instances {
             let eye = camera.eye_in(*model);
             let clip_from_local = clip_from_world * *model;
             let proxy = settings.proxy && lum.proxy.is_some();
             let polygon_view = !proxy && lum.polygon_applies(eye);
-            let cams = if !lum.fully_resident || polygon_view {
-                lum.cameras_for_view(eye, settings.mode)
+            let (cams, bound) = if !lum.fully_resident || polygon_view {
+                lum.view_geometry(eye, clip_from_local, settings.mode, viewport, polygon_view)
             } else {
-                Vec::new()
-            };
-            let bound = if polygon_view {
-                lum.lit.bound(&cams, settings.mode, clip_from_local, eye.truncate())
-            } else {
-                None
+                (Vec::new(), None)
             };
             if !lum.fully_resident {
                 match per_lum.iter_mut().find(|(l, _)| Arc::ptr_eq(l, lum)) {
@@ -956,14 +1018,15 @@ impl NearfieldPass {
             let (geometry, cull) = match (proxy, bound, outside) {
                 (true, _, _) => (DrawGeometry::Proxy, None),
                 // No selectable camera has light in the view.
-                (false, Some(p), _) if p.is_empty() => continue,
-                (false, Some(p), _) => {
+                (false, Some((p, _)), _) if p.is_empty() => continue,
+                (false, Some((p, triangles)), _) => {
                     let first = polygons.len() as u32;
                     polygons.extend_from_slice(&p);
                     (
                         DrawGeometry::Polygon {
                             first,
                             count: p.len() as u32,
+                            triangles,
                         },
                         None,
                     )
@@ -990,7 +1053,7 @@ impl NearfieldPass {
                 let cap = n.next_power_of_two().max(256);
                 let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("near-field bounding polygons"),
-                    size: cap * 12,
+                    size: cap * std::mem::size_of::<PolygonVertex>() as u64,
                     usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
@@ -1003,6 +1066,10 @@ impl NearfieldPass {
         let mut with_pipelines = Vec::with_capacity(draws.len());
         for (slot, lum, geometry, selection, cull) in draws {
             let proxy = matches!(geometry, DrawGeometry::Proxy);
+            let (polygon, triangles) = match geometry {
+                DrawGeometry::Polygon { triangles, .. } => (true, triangles),
+                _ => (false, false),
+            };
             let pipeline = self.pipeline(
                 ctx,
                 PipelineKey {
@@ -1015,6 +1082,8 @@ impl NearfieldPass {
                     selection,
                     proxy,
                     cull,
+                    polygon,
+                    triangles,
                 },
             )?;
             with_pipelines.push((slot, lum, geometry, pipeline));
@@ -1030,7 +1099,7 @@ impl NearfieldPass {
         for (slot, lum, geometry, pipeline) in &frame.draws {
             let (vb, range) = match (geometry, &lum.proxy, &self.polygons) {
                 (DrawGeometry::Proxy, Some(p), _) => (&p.0, 0..p.1),
-                (DrawGeometry::Polygon { first, count }, _, Some((b, _))) => (b, *first..*first + *count),
+                (DrawGeometry::Polygon { first, count, .. }, _, Some((b, _))) => (b, *first..*first + *count),
                 _ => (&lum.bounds.0, 0..lum.bounds.1),
             };
             pass.set_pipeline(pipeline);

@@ -246,9 +246,9 @@ impl Renderer {
             }
         }
         let far_frame = self.farfield.prepare(&self.ctx, target, camera, options, &far)?;
-        let near_frame =
-            self.nearfield
-                .prepare(&self.ctx, target.desc.color, target.desc.depth, camera, options, &near)?;
+        let near_frame = self
+            .nearfield
+            .prepare(&self.ctx, &target.desc, camera, options, &near)?;
         let (farfield, nearfield) = (&self.farfield, &self.nearfield);
         render_frame(&self.ctx, target, camera, |pass| {
             farfield.draw(&far_frame, pass);
