@@ -45,7 +45,7 @@ struct Lum {
     // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z, w unused.
     gap: vec4<f32>,
     // The proxy's BVH in `tris` (src/nearfield/bvh.rs): x = first node word (2 per node), y = first
-    // triangle word (3 per triangle), z = 1 when there is one.
+    // triangle word (3 per triangle), z = 1 when there is one, w = number of nodes.
     bvh: vec4<u32>,
 };
 
@@ -417,15 +417,12 @@ fn occluded(origin: vec3<f32>, dest: vec3<f32>) -> bool {
     // No zero components: the slab test divides by them.
     d = select(d, vec3<f32>(1e-20), abs(d) < vec3<f32>(1e-20));
     let inv = 1.0 / d;
-    var stack: array<u32, 33>;
-    stack[0] = 0u;
-    var sp = 1u;
+    // Preorder with escape indices: no stack (see src/nearfield/bvh.rs).
+    var n = 0u;
     loop {
-        if (sp == 0u) {
+        if (n >= lum.bvh.w) {
             break;
         }
-        sp = sp - 1u;
-        let n = stack[sp];
         let a = tris[nodes + 2u * n];
         let b = tris[nodes + 2u * n + 1u];
         let t0 = (a.xyz - origin) * inv;
@@ -434,37 +431,34 @@ fn occluded(origin: vec3<f32>, dest: vec3<f32>) -> bool {
         let hi = max(t0, t1);
         let tmin = max(max(max(lo.x, lo.y), lo.z), eps);
         let tmax = min(min(min(hi.x, hi.y), hi.z), 1.0 - eps);
-        if (tmin > tmax) {
-            continue;
-        }
         let first = bitcast<u32>(a.w);
         let count = bitcast<u32>(b.w);
-        if (count > 0u) {
-            for (var j = first; j < first + count; j = j + 1u) {
-                let v0 = tris[toff + 3u * j].xyz;
-                let e1 = tris[toff + 3u * j + 1u].xyz;
-                let e2 = tris[toff + 3u * j + 2u].xyz;
-                // Möller–Trumbore.
-                let pv = cross(d, e2);
-                let det = dot(e1, pv);
-                if (abs(det) < 1e-20) {
-                    continue;
-                }
-                let idet = 1.0 / det;
-                let sv = origin - v0;
-                let u = dot(sv, pv) * idet;
-                let q = cross(sv, e1);
-                let w = dot(d, q) * idet;
-                let t = dot(e2, q) * idet;
-                if (u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > eps && t < 1.0 - eps) {
-                    return true;
-                }
-            }
-        } else if (sp + 2u <= 33u) {
-            stack[sp] = first;
-            stack[sp + 1u] = first + 1u;
-            sp = sp + 2u;
+        if (tmin > tmax) {
+            // Missed: skip the subtree (a leaf's is itself).
+            n = select(first, n + 1u, count > 0u);
+            continue;
         }
+        for (var j = first; j < first + count; j = j + 1u) {
+            let v0 = tris[toff + 3u * j].xyz;
+            let e1 = tris[toff + 3u * j + 1u].xyz;
+            let e2 = tris[toff + 3u * j + 2u].xyz;
+            // Möller–Trumbore.
+            let pv = cross(d, e2);
+            let det = dot(e1, pv);
+            if (abs(det) < 1e-20) {
+                continue;
+            }
+            let idet = 1.0 / det;
+            let sv = origin - v0;
+            let u = dot(sv, pv) * idet;
+            let q = cross(sv, e1);
+            let w = dot(d, q) * idet;
+            let t = dot(e2, q) * idet;
+            if (u >= 0.0 && w >= 0.0 && u + w <= 1.0 && t > eps && t < 1.0 - eps) {
+                return true;
+            }
+        }
+        n = n + 1u;
     }
     return false;
 }

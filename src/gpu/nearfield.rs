@@ -704,7 +704,7 @@ impl NearfieldPass {
                     geometry.extend_from_slice(&b.nodes);
                     let tris = geometry.len() as u32;
                     geometry.extend_from_slice(&b.triangles);
-                    [nodes, tris, 1, 0]
+                    [nodes, tris, 1, (b.nodes.len() / 2) as u32]
                 }
                 None => [0; 4],
             };

@@ -4,12 +4,19 @@
 //!
 //! Built on the CPU by median splits along the longest axis of the triangles' centroids, at most
 //! [`LEAF_TRIANGLES`] triangles per leaf; the depth is at most ⌈log₂(n / LEAF)⌉ + 1, far below the
-//! shader's stack of [`MAX_DEPTH`]. [`ProxyBvh::occluded`] is the CPU twin of the shader's traversal
+//! builder's limit of [`MAX_DEPTH`]. [`ProxyBvh::occluded`] is the CPU twin of the shader's traversal
 //! (shaders/nearfield.wgsl, `occluded`), used by the tests.
+//!
+//! Nodes are stored in depth-first preorder, each interior node with its *escape* (the first node
+//! after its subtree), so the traversal needs no stack: on a hit go to the next node (an interior
+//! node's left child), on a miss jump to the escape (a leaf's escape is the next node). The index only
+//! grows, so it ends after at most one visit per node. On lavapipe this halved the proxy mode's frame
+//! (the stack was a per-lane array that WGSL zero-fills on every call, three calls per fragment).
 //!
 //! # GPU layout (`[f32; 4]` words, little-endian)
 //! - node i: `[min.xyz, bits(a)]`, `[max.xyz, bits(b)]`; a leaf has b > 0: triangles a … a + b − 1;
-//!   an interior node has b = 0 and children a and a + 1. Node 0 is the root.
+//!   an interior node has b = 0 and escape a; its children are i + 1 and the node after the left
+//!   child's subtree. Node 0 is the root.
 //! - triangle j: `[v0.xyz, 0]`, `[e1.xyz, 0]`, `[e2.xyz, 0]` with e1 = v1 − v0, e2 = v2 − v0, in the
 //!   order the leaves refer to.
 
@@ -20,7 +27,7 @@ use super::error::{NearfieldError, Result};
 /// Most triangles in a leaf.
 pub const LEAF_TRIANGLES: usize = 4;
 
-/// Traversal stack of the shader; the builder refuses deeper trees.
+/// The builder refuses deeper trees (its recursion).
 pub const MAX_DEPTH: usize = 32;
 
 /// Largest proxy accepted (triangles): keeps the GPU buffer under 128 MiB.
@@ -78,11 +85,11 @@ impl ProxyBvh {
             })
             .collect();
         let mut bvh = ProxyBvh {
-            nodes: vec![[0.0; 4]; 2],
+            nodes: Vec::new(),
             triangles: Vec::with_capacity(tris.len() * 3),
             depth: 0,
         };
-        bvh.split(0, &mut tris[..], 1)?;
+        bvh.split(&mut tris[..], 1)?;
         Ok(bvh)
     }
 
@@ -91,7 +98,8 @@ impl ProxyBvh {
         self.nodes[2 * node + 1] = [hi.x, hi.y, hi.z, f32::from_bits(b)];
     }
 
-    fn split(&mut self, node: usize, tris: &mut [Tri], depth: usize) -> Result<()> {
+    /// Appends the subtree of `tris` in preorder.
+    fn split(&mut self, tris: &mut [Tri], depth: usize) -> Result<()> {
         if depth > MAX_DEPTH {
             return Err(NearfieldError::invalid(
                 "proxy",
@@ -99,6 +107,8 @@ impl ProxyBvh {
             ));
         }
         self.depth = self.depth.max(depth);
+        let node = self.nodes.len() / 2;
+        self.nodes.extend([[0.0; 4]; 2]);
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         let (mut clo, mut chi) = (lo, hi);
         for t in tris.iter() {
@@ -130,12 +140,11 @@ impl ProxyBvh {
         };
         let mid = tris.len() / 2;
         tris.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
-        let left = self.nodes.len() / 2;
-        self.nodes.extend([[0.0; 4]; 4]);
-        self.set_node(node, lo, hi, left as u32, 0);
         let (l, r) = tris.split_at_mut(mid);
-        self.split(left, l, depth + 1)?;
-        self.split(left + 1, r, depth + 1)?;
+        self.split(l, depth + 1)?;
+        self.split(r, depth + 1)?;
+        let escape = self.nodes.len() / 2;
+        self.set_node(node, lo, hi, escape as u32, 0);
         Ok(())
     }
 
@@ -144,11 +153,9 @@ impl ProxyBvh {
     pub fn occluded(&self, from: Vec3, to: Vec3, eps: f32) -> bool {
         let d = to - from;
         let inv = Vec3::ONE / d;
-        let mut stack = [0u32; MAX_DEPTH + 1];
-        let mut sp = 1usize;
-        while sp > 0 {
-            sp -= 1;
-            let n = stack[sp] as usize;
+        let count_nodes = self.nodes.len() / 2;
+        let mut n = 0usize;
+        while n < count_nodes {
             let (a, b) = (self.nodes[2 * n], self.nodes[2 * n + 1]);
             let lo = Vec3::new(a[0], a[1], a[2]);
             let hi = Vec3::new(b[0], b[1], b[2]);
@@ -156,10 +163,12 @@ impl ProxyBvh {
             let t1 = (hi - from) * inv;
             let tmin = t0.min(t1).max_element().max(eps);
             let tmax = t0.max(t1).min_element().min(1.0 - eps);
+            let (first, count) = (a[3].to_bits(), b[3].to_bits());
             if tmin > tmax {
+                // Missed: skip the subtree.
+                n = if count > 0 { n + 1 } else { first as usize };
                 continue;
             }
-            let (first, count) = (a[3].to_bits(), b[3].to_bits());
             if count > 0 {
                 for j in first..first + count {
                     let j = 3 * j as usize;
@@ -172,11 +181,8 @@ impl ProxyBvh {
                         }
                     }
                 }
-            } else if sp + 2 <= stack.len() {
-                stack[sp] = first;
-                stack[sp + 1] = first + 1;
-                sp += 2;
             }
+            n += 1;
         }
         false
     }
