@@ -113,6 +113,11 @@ override PROXY: bool = false;
 // triangle's weights directly, without the cell search.
 override TRIANGLES: bool = false;
 
+// Nearest mode without a proxy, drawn as the cell raster (src/gpu/lit_bound.rs): each polygon covers
+// (a little more than) one camera's Voronoi cell, `tri` naming the camera; the fragment runs the usual
+// selection and is kept only where it picks that camera, so overlapping cells write each pixel once.
+override CELLS: bool = false;
+
 // The pool chunk of pack chunk `c` (EMPTY: not resident).
 fn pool_chunk(c: u32) -> u32 {
     if (IDENTITY_MAP) {
@@ -466,7 +471,8 @@ fn occluded(origin: vec3<f32>, dest: vec3<f32>) -> bool {
 struct VsOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) local_pos: vec3<f32>,
-    // The selection triangle of the triangle raster (TRIANGLES), else EMPTY.
+    // The selection triangle of the triangle raster (TRIANGLES), the camera of the cell raster
+    // (CELLS), else EMPTY.
     @location(1) @interpolate(flat) tri: u32,
 };
 
@@ -539,6 +545,9 @@ fn shade(in: VsOut) -> Shaded {
         sel = select_continuous(u, cell_of(u));
     } else {
         sel = select_nearest(u, cell_of(u), SELECTION == 1u);
+        if (CELLS && sel.cam.x != in.tri) {
+            return out;
+        }
     }
     // Cameras the mode can select: 1 (nearest), 4 (idw4), 3 (continuous).
     let n_cams = select(select(3u, 4u, SELECTION == 1u), 1u, SELECTION == 0u);

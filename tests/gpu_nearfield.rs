@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3, Mat4};
+use lumiview::gpu::lit_bound::PolygonKind;
 use lumiview::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
 use lumiview::gpu::{Attachment, ColorFormat, DepthFormat, HostCamera, RenderOptions, Renderer, TargetDesc};
 use lumiview::nearfield::layout::Layout;
@@ -258,10 +259,15 @@ fn bounding_polygon_renders_what_the_box_renders() {
         for mode in [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous] {
             let hc = HostCamera::from_pinhole(&cam, &k, 0.01, 20.0);
             let polygon = lum.bounding_polygon(hc.eye_in(Mat4::IDENTITY), hc.clip_from_world(), mode, (128, 128));
-            if let Some((p, raster)) = polygon {
+            if let Some((p, kind)) = polygon {
                 polygons += usize::from(!p.is_empty());
-                rasters += usize::from(raster);
-                assert_eq!(raster, mode == SelectionMode::Continuous, "eye {e}, {mode:?}");
+                let want = match mode {
+                    SelectionMode::Continuous => PolygonKind::Triangles,
+                    SelectionMode::Nearest => PolygonKind::Cells,
+                    SelectionMode::Idw4 => PolygonKind::Hull,
+                };
+                rasters += usize::from(kind != PolygonKind::Hull);
+                assert_eq!(kind, want, "eye {e}, {mode:?}");
             }
             let mut frames = Vec::new();
             for id in [tight, boxed] {
@@ -305,7 +311,10 @@ fn bounding_polygon_renders_what_the_box_renders() {
     assert!(lit_views >= 12, "only {lit_views} views show the luminaire");
     // The far and grazing eyes in every mode at least (the polygon, not the box, was compared).
     assert!(polygons >= 12, "only {polygons} views drew the bounding polygon");
-    assert!(rasters >= 4, "only {rasters} continuous views drew the triangle raster");
+    assert!(
+        rasters >= 8,
+        "only {rasters} continuous or nearest views drew their raster"
+    );
     gpu_common::assert_no_validation_messages();
 }
 

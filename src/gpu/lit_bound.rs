@@ -37,6 +37,10 @@ struct CameraCone {
     vertex: DVec3,
     /// ρ for nearest, idw4, continuous.
     rho: [f64; 3],
+    /// The corners of the camera's Voronoi cell (unit directions: the circumcentres of the triangles
+    /// around its vertex); `None` where a triangle around it is a hole or folded (its region then
+    /// reaches out to the max gap: the cap of radius ρ stands in).
+    cell: Option<Vec<DVec3>>,
 }
 
 /// The per-camera data of the bounding polygon.
@@ -57,11 +61,17 @@ impl LitDirections {
         // Per vertex: longest edge in a non-hole triangle, largest circumradius (capped at max_gap).
         let mut edge = vec![0f64; dirs.len()];
         let mut circ = vec![0f64; dirs.len()];
+        let mut cells: Vec<Option<Vec<DVec3>>> = vec![Some(Vec::new()); dirs.len()];
         for (i, tri) in sel.triangles().iter().enumerate() {
             let r = sel.circumcap(i).map_or(max_gap, |c| c.1).min(max_gap);
+            let open = sel.is_hole(i) || sel.is_folded(i) || r >= max_gap;
             for k in 0..3 {
                 let v = tri[k] as usize;
                 circ[v] = circ[v].max(r);
+                match (open, sel.circumcap(i), &mut cells[v]) {
+                    (false, Some((cc, _)), Some(list)) => list.push(cc),
+                    _ => cells[v] = None,
+                }
                 if !sel.is_hole(i) {
                     for o in [tri[(k + 1) % 3], tri[(k + 2) % 3]] {
                         edge[v] = edge[v].max(angle(dirs[v], dirs[o as usize]));
@@ -100,6 +110,7 @@ impl LitDirections {
                     corners: [dir(x0, y0), dir(x1, y0), dir(x1, y1), dir(x0, y1)],
                     vertex: dirs[v],
                     rho: [grow(circ[v]), grow(max_gap), grow(edge[v])],
+                    cell: cells[v].clone().filter(|c| c.len() >= 3),
                 })
             })
             .collect();
@@ -207,6 +218,17 @@ pub struct PolygonVertex {
 
 /// The `tri` of a hull polygon's vertices.
 pub const EMPTY_TRIANGLE: u32 = u32::MAX;
+
+/// What a frame's bounding polygons are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PolygonKind {
+    /// The convex hull ([`LitDirections::bound`]); `tri` is [`EMPTY_TRIANGLE`].
+    Hull,
+    /// The continuous raster ([`LitDirections::continuous_raster`]); `tri` is a selection triangle.
+    Triangles,
+    /// The nearest raster ([`LitDirections::nearest_raster`]); `tri` is a camera.
+    Cells,
+}
 
 /// Screen geometry of one view: NDC ↔ pixels, the sign that puts first sphere hits in front.
 struct Screen {
@@ -348,6 +370,180 @@ impl LitDirections {
     }
 }
 
+impl LitDirections {
+    /// The nearest-mode raster of a perspective view from `eye` (outside the content ball of radius
+    /// `content_m`) for a `viewport` of pixels: per selectable camera, the screen region of its
+    /// Voronoi cell (the lines whose first sphere hit is nearest to it; the convex hull of its
+    /// corners' images grown by the arcs' sagitta and a pixel; the cap of radius ρ where the cell is
+    /// open), cut to the content ball's silhouette and to the camera's own cone D; each vertex names
+    /// the camera. The shader runs the usual nearest selection and keeps a fragment only where it
+    /// picks the polygon's camera, so each pixel is written once however the grown cells overlap.
+    /// `None`: a point or direction involved is not in front of the eye.
+    pub fn nearest_raster(
+        &self,
+        cameras: &[u32],
+        clip_from_local: Mat4,
+        eye: Vec3,
+        content_m: f64,
+        viewport: (u32, u32),
+    ) -> Option<Vec<PolygonVertex>> {
+        let (centre, r_s) = self.sphere;
+        let e = eye.as_dvec3();
+        let to_c = centre - e;
+        let dist_c = to_c.length();
+        if dist_c <= content_m * 1.0001 {
+            return None;
+        }
+        let screen = Screen {
+            clip_from_local,
+            half: Vec2::new(viewport.0 as f32, viewport.1 as f32) * 0.5,
+            sign: if (e - centre).length() > r_s { 1.0 } else { -1.0 },
+        };
+        let ball = ball_octagon(&screen, to_c / dist_c, content_m / dist_c)?;
+        let pt4 = |q: DVec3| Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0);
+        let on_sphere = |d: DVec3| screen.px(pt4(centre + d * r_s), screen.sign);
+        let local_from_clip = clip_from_local.inverse();
+        let mut out = Vec::new();
+        for &c in cameras {
+            let Some(Some(cone)) = self.cameras.get(c as usize) else {
+                continue;
+            };
+            let mut d = Vec::with_capacity(4);
+            for q in cone.corners {
+                d.push(screen.px(Vec4::new(q.x, q.y, q.z, 0.0), 1.0)?);
+            }
+            // The cell's corners on the sphere: its Voronoi corners, or an octagon around the cap.
+            let corners: Vec<DVec3> = match &cone.cell {
+                Some(cell) => cell.clone(),
+                None => {
+                    let (b1, b2) = orthonormal(cone.vertex);
+                    let tan_r = cone.rho[0].min(1.4).tan() / (std::f64::consts::PI / 8.0).cos();
+                    (0..8)
+                        .map(|k| {
+                            let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+                            (cone.vertex + (b1 * a.cos() + b2 * a.sin()) * tan_r).normalize()
+                        })
+                        .collect()
+                }
+            };
+            let mut pts = Vec::with_capacity(corners.len());
+            for q in &corners {
+                let p = on_sphere(*q)?;
+                pts.push((p.x, p.y, *q));
+            }
+            let hull = convex_hull(pts);
+            if hull.len() < 3 {
+                continue;
+            }
+            // Grow by the largest sagitta of an edge's arc, and a pixel.
+            let mut grow = 1.0f32;
+            for i in 0..hull.len() {
+                let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
+                let arc = on_sphere((a + b).normalize())?;
+                let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
+                grow = grow.max(1.0 + (arc - chord).length() * 1.5);
+            }
+            let poly: Vec<Vec2> = hull.iter().map(|h| Vec2::new(h.0, h.1)).collect();
+            let Some(grown) = grow_convex(&poly, grow) else {
+                continue;
+            };
+            let clipped = clip_convex(&clip_convex(&grown, &ball), &d);
+            emit_on_plane(
+                &clipped,
+                &screen,
+                &local_from_clip,
+                e,
+                to_c / dist_c,
+                dist_c,
+                c,
+                &mut out,
+            )?;
+        }
+        Some(out)
+    }
+}
+
+/// The octagon (pixels) around the cone from the eye along `axis` of half-angle asin(`sin_half`).
+fn ball_octagon(screen: &Screen, axis: DVec3, sin_half: f64) -> Option<Vec<Vec2>> {
+    let tan_b = sin_half.min(1.0).asin().tan() / (std::f64::consts::PI / 8.0).cos();
+    if tan_b > 5.0 {
+        return None;
+    }
+    let (b1, b2) = orthonormal(axis);
+    let mut ball = Vec::with_capacity(8);
+    for k in 0..8 {
+        let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+        let d = axis + (b1 * a.cos() + b2 * a.sin()) * tan_b;
+        ball.push(screen.px(Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0), 1.0)?);
+    }
+    Some(ball)
+}
+
+/// Appends a convex polygon (pixels) as a fan of triangles on the plane through the centre facing
+/// the eye (`axis` from the eye to the centre, `dist` away), every vertex naming `tri`. `None` when a
+/// vertex's line does not cross the plane in front of the eye.
+#[allow(clippy::too_many_arguments)]
+fn emit_on_plane(
+    poly: &[Vec2],
+    screen: &Screen,
+    local_from_clip: &Mat4,
+    eye: DVec3,
+    axis: DVec3,
+    dist: f64,
+    tri: u32,
+    out: &mut Vec<PolygonVertex>,
+) -> Option<()> {
+    if poly.len() < 3 {
+        return Some(());
+    }
+    let mut on_plane = Vec::with_capacity(poly.len());
+    for v in poly {
+        let ndc = *v / screen.half;
+        let h = *local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
+        let d = (h.truncate() / h.w).as_dvec3() - eye;
+        let dn = d.dot(axis);
+        if dn.is_nan() || dn <= 1e-9 * d.length() {
+            return None;
+        }
+        on_plane.push((eye + d * (dist / dn)).as_vec3().to_array());
+    }
+    for i in 1..on_plane.len() - 1 {
+        for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
+            out.push(PolygonVertex { pos, tri });
+        }
+    }
+    Some(())
+}
+
+/// A convex polygon (pixels, either orientation) with each edge moved `d` pixels outwards; `None`
+/// when degenerate.
+fn grow_convex(p: &[Vec2], d: f32) -> Option<Vec<Vec2>> {
+    let n = p.len();
+    let area: f32 = (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum();
+    if area.is_nan() || area.abs() <= 1e-6 {
+        return None;
+    }
+    let s = area.signum();
+    let line = |k: usize| {
+        let (a, b) = (p[k], p[(k + 1) % n]);
+        let t = (b - a).normalize_or_zero();
+        (a + Vec2::new(t.y, -t.x) * s * d, t)
+    };
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let (a0, t0) = line(k);
+        let (a1, t1) = line((k + 1) % n);
+        let den = t0.perp_dot(t1);
+        if den.abs() < 1e-6 {
+            // Collinear edges (or a zero-length one): the shared vertex, moved out.
+            out.push(a1);
+            continue;
+        }
+        out.push(a0 + t0 * ((a1 - a0).perp_dot(t1) / den));
+    }
+    Some(out)
+}
+
 /// A triangle (pixels) with each edge moved `d` pixels outwards; `None` when degenerate.
 fn grow_triangle(p: [Vec2; 3], d: f32) -> Option<Vec<Vec2>> {
     let area = (p[1] - p[0]).perp_dot(p[2] - p[0]);
@@ -446,6 +642,30 @@ fn convex_hull<T: Copy>(mut p: Vec<(f32, f32, T)>) -> Vec<(f32, f32, T)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn growing_a_convex_polygon_moves_every_edge_out() {
+        // Clockwise, to check the orientation is handled.
+        let sq = [
+            Vec2::new(0.0, 0.0),
+            Vec2::new(0.0, 2.0),
+            Vec2::new(2.0, 2.0),
+            Vec2::new(2.0, 0.0),
+        ];
+        let g = grow_convex(&sq, 1.0).unwrap();
+        let area: f32 = (0..g.len()).map(|i| g[i].perp_dot(g[(i + 1) % g.len()])).sum::<f32>() * 0.5;
+        assert!((area.abs() - 16.0).abs() < 1e-4, "{g:?}");
+        let t = grow_triangle([Vec2::new(0.0, 0.0), Vec2::new(4.0, 0.0), Vec2::new(0.0, 3.0)], 0.5).unwrap();
+        // Every original vertex lies inside the grown triangle, at least 0.5 from each edge.
+        for v in [Vec2::new(0.0, 0.0), Vec2::new(4.0, 0.0), Vec2::new(0.0, 3.0)] {
+            for i in 0..3 {
+                let (a, b) = (t[i], t[(i + 1) % 3]);
+                let dist = (b - a).perp_dot(v - a) / (b - a).length();
+                assert!(dist.abs() >= 0.5 - 1e-4, "{v} {t:?}");
+            }
+        }
+        assert!(grow_convex(&[Vec2::ZERO, Vec2::X, Vec2::X * 2.0], 1.0).is_none());
+    }
 
     #[test]
     fn clipping_two_squares() {

@@ -16,7 +16,7 @@ use glam::{DVec3, Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
-use super::lit_bound::{LitDirections, PolygonVertex, EMPTY_TRIANGLE};
+use super::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, TargetDesc, POSITION_LAYOUT};
@@ -233,16 +233,15 @@ impl NearfieldLuminaire {
 
     /// What the pass draws for an instance in `mode` without its proxy, seen from `eye` (luminaire
     /// frame, as in [`Self::cameras_for_view`]) through `clip_from_local` into a `viewport` of pixels:
-    /// the bounding polygons ([`crate::gpu::lit_bound`]) as a triangle list, with `true` when they
-    /// are the continuous raster (else the hull); an empty list when no pixel can be lit; `None` where
-    /// the pass draws the content ball's box.
+    /// the bounding polygons ([`crate::gpu::lit_bound`]) as a triangle list, and which kind they are;
+    /// an empty list when no pixel can be lit; `None` where the pass draws the content ball's box.
     pub fn bounding_polygon(
         &self,
         eye: Vec4,
         clip_from_local: Mat4,
         mode: SelectionMode,
         viewport: (u32, u32),
-    ) -> Option<(Vec<PolygonVertex>, bool)> {
+    ) -> Option<(Vec<PolygonVertex>, PolygonKind)> {
         let applies = self.polygon_applies(eye);
         applies
             .then(|| self.view_geometry(eye, clip_from_local, mode, viewport, applies).1)
@@ -258,7 +257,7 @@ impl NearfieldLuminaire {
         mode: SelectionMode,
         viewport: (u32, u32),
         polygon: bool,
-    ) -> (Vec<u32>, Option<(Vec<PolygonVertex>, bool)>) {
+    ) -> (Vec<u32>, Option<(Vec<PolygonVertex>, PolygonKind)>) {
         let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
         let cams = self.selection.cameras_of_cells(mode, cells.iter().copied());
         if !polygon {
@@ -282,7 +281,15 @@ impl NearfieldLuminaire {
                 viewport,
             );
             if let Some(r) = raster {
-                return (cams, Some((r, true)));
+                return (cams, Some((r, PolygonKind::Triangles)));
+            }
+        }
+        if mode == SelectionMode::Nearest {
+            let raster =
+                self.lit
+                    .nearest_raster(&cams, clip_from_local, eye.truncate(), self.content_radius_m, viewport);
+            if let Some(r) = raster {
+                return (cams, Some((r, PolygonKind::Cells)));
             }
         }
         let hull = self.lit.bound(&cams, mode, clip_from_local, eye.truncate()).map(|p| {
@@ -290,7 +297,7 @@ impl NearfieldLuminaire {
                 pos,
                 tri: EMPTY_TRIANGLE,
             });
-            (v.collect(), false)
+            (v.collect(), PolygonKind::Hull)
         });
         (cams, hull)
     }
@@ -437,10 +444,9 @@ struct PipelineKey {
     /// Faces culled: none for a proxy, back faces of the bounding box from outside it, front faces
     /// from inside.
     cull: Option<wgpu::Face>,
-    /// Drawing the frame's polygons (vertex layout [`POLYGON_LAYOUT`], entry `vs_polygon`).
-    polygon: bool,
-    /// The shader's `TRIANGLES`: the polygons are the continuous raster.
-    triangles: bool,
+    /// Drawing the frame's polygons (vertex layout [`POLYGON_LAYOUT`], entry `vs_polygon`), of
+    /// this kind (the shader's `TRIANGLES` and `CELLS`).
+    polygon: Option<PolygonKind>,
 }
 
 const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
@@ -472,9 +478,8 @@ enum DrawGeometry {
     Proxy,
     /// The box around the content ball.
     Box,
-    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]):
-    /// the continuous raster (`triangles`, each vertex naming its selection triangle) or the hull.
-    Polygon { first: u32, count: u32, triangles: bool },
+    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]).
+    Polygon { first: u32, count: u32, kind: PolygonKind },
 }
 
 /// One prepared frame of the pass: draws whose uniforms are written.
@@ -918,9 +923,13 @@ impl NearfieldPass {
                 layout: Some(&self.pipeline_layout),
                 vertex: wgpu::VertexState {
                     module: &self.module,
-                    entry_point: Some(if key.polygon { "vs_polygon" } else { "vs_main" }),
+                    entry_point: Some(if key.polygon.is_some() { "vs_polygon" } else { "vs_main" }),
                     compilation_options: Default::default(),
-                    buffers: &[Some(if key.polygon { POLYGON_LAYOUT } else { POSITION_LAYOUT })],
+                    buffers: &[Some(if key.polygon.is_some() {
+                        POLYGON_LAYOUT
+                    } else {
+                        POSITION_LAYOUT
+                    })],
                 },
                 primitive: wgpu::PrimitiveState {
                     topology: wgpu::PrimitiveTopology::TriangleList,
@@ -942,7 +951,11 @@ impl NearfieldPass {
                             ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
                             ("SELECTION", f64::from(key.selection)),
                             ("PROXY", f64::from(u8::from(key.proxy))),
-                            ("TRIANGLES", f64::from(u8::from(key.triangles))),
+                            (
+                                "TRIANGLES",
+                                f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
+                            ),
+                            ("CELLS", f64::from(u8::from(key.polygon == Some(PolygonKind::Cells)))),
                             ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
                             ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
                             ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
@@ -1019,14 +1032,14 @@ impl NearfieldPass {
                 (true, _, _) => (DrawGeometry::Proxy, None),
                 // No selectable camera has light in the view.
                 (false, Some((p, _)), _) if p.is_empty() => continue,
-                (false, Some((p, triangles)), _) => {
+                (false, Some((p, kind)), _) => {
                     let first = polygons.len() as u32;
                     polygons.extend_from_slice(&p);
                     (
                         DrawGeometry::Polygon {
                             first,
                             count: p.len() as u32,
-                            triangles,
+                            kind,
                         },
                         None,
                     )
@@ -1066,9 +1079,9 @@ impl NearfieldPass {
         let mut with_pipelines = Vec::with_capacity(draws.len());
         for (slot, lum, geometry, selection, cull) in draws {
             let proxy = matches!(geometry, DrawGeometry::Proxy);
-            let (polygon, triangles) = match geometry {
-                DrawGeometry::Polygon { triangles, .. } => (true, triangles),
-                _ => (false, false),
+            let polygon = match geometry {
+                DrawGeometry::Polygon { kind, .. } => Some(kind),
+                _ => None,
             };
             let pipeline = self.pipeline(
                 ctx,
@@ -1083,7 +1096,6 @@ impl NearfieldPass {
                     proxy,
                     cull,
                     polygon,
-                    triangles,
                 },
             )?;
             with_pipelines.push((slot, lum, geometry, pipeline));
