@@ -122,7 +122,7 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
     lv_angles_of(d, &c_deg, &g_deg);
     if (!lv_lumi_ok(lumi_luminaire_sample(ctx, lum, c_deg, g_deg, NULL, &l_pred), "lumi_luminaire_sample"))
         return false;
-    double t_lum = lv_tonemap(l_pred, v->exposure);
+    double t_lum = lv_tonemap(l_pred, v->luminaire_exposure);
     double pred_lum[3] = {t_lum, t_lum, t_lum};
 
     /* Prediction 2: the room along the pixel's ray. */
@@ -170,7 +170,7 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
            "(%.4f, %.4f, %.4f) [%u %u %u] (%.3f m away, E = %.4g lux); depth luminaire %.6f, %s %.6f; expected: %s, "
            "off by %.4f (tolerance %.4f) -> %s\n",
            x, y, shown[0], shown[1], shown[2], px[0], px[1], px[2], t_lum, lv_to_u8(t_lum), c_deg, g_deg, l_pred,
-           (double)lib[0], v->exposure, box->name, pred_room[0], pred_room[1], pred_room[2], lv_to_u8(pred_room[0]),
+           (double)lib[0], v->luminaire_exposure, box->name, pred_room[0], pred_room[1], pred_room[2], lv_to_u8(pred_room[0]),
            lv_to_u8(pred_room[1]), lv_to_u8(pred_room[2]), t, e, (double)lib_depth, box->name, room_depth,
            expect_room ? (box->name) : "luminaire", diff, PIXEL_TOLERANCE, ok ? "PASS" : "FAIL");
     bool footprint_ok = check_footprint(s, color, vp, v->width, v->height);
@@ -178,8 +178,9 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
         fprintf(stderr, "glfw_host: note: L = %.6g cd/m² exceeds RGBA16F's largest value (65504); use "
                         "--color-format rgba32f\n", l_pred);
     if (!ok && expect_room && !distinguishable)
-        fprintf(stderr, "glfw_host: the %s's shade and the luminaire's predicted value are too close at exposure %g "
-                        "to tell them apart; choose another exposure\n", box->name, v->exposure);
+        fprintf(stderr, "glfw_host: the %s's shade and the luminaire's predicted value are too close at exposures %g "
+                        "(room) and %g (luminaire) to tell them apart; choose another exposure\n", box->name,
+                v->exposure, v->luminaire_exposure);
     else if (!ok)
         fprintf(stderr, "glfw_host: pixel %ld,%ld shows (%u %u %u), expected the %s's (%u %u %u) within %.0f/255\n", x,
                 y, px[0], px[1], px[2], expect_room ? box->name : "luminaire", lv_to_u8(expected[0]),
@@ -239,7 +240,7 @@ bool check_nearfield_pixel(const scene *s, const gl_imported *color, const gl_im
     }
     double shown = px[0] / 255.0, l_img = lib[0];
     double l_pred = proxy_expected ? LV_SCAN_CENTRE_CD_M2 : l_img;
-    double t_pred = lv_tonemap(l_pred, v->exposure);
+    double t_pred = lv_tonemap(l_pred, v->luminaire_exposure);
     double rel = (l_img - LV_SCAN_CENTRE_CD_M2) / LV_SCAN_CENTRE_CD_M2;
     bool ok = fabs(shown - t_pred) <= PIXEL_TOLERANCE + 1e-9 && fabs(px[1] / 255.0 - t_pred) <= PIXEL_TOLERANCE + 1e-9 &&
               fabs(px[2] / 255.0 - t_pred) <= PIXEL_TOLERANCE + 1e-9;
@@ -249,7 +250,7 @@ bool check_nearfield_pixel(const scene *s, const gl_imported *color, const gl_im
                "%%), composited = [%u %u %u], predicted %.4f [%u] (exposure %g); depth %.6f in front of the %s (%.6f) "
                "-> %s\n",
                x, y, mode_name, l_img, LV_SCAN_CENTRE_CD_M2, rel * 100.0, px[0], px[1], px[2], t_pred, lv_to_u8(t_pred),
-               v->exposure, (double)lib_depth, box ? box->name : "room", room_depth, ok ? "PASS" : "FAIL");
+               v->luminaire_exposure, (double)lib_depth, box ? box->name : "room", room_depth, ok ? "PASS" : "FAIL");
     else
         printf("check-nearfield-pixel %ld,%ld (%s, proxy off): lumiview L = %.6g cd/m² (no ground truth without the "
                "proxy), composited = [%u %u %u], tonemap of lumiview's value %.4f [%u]; stand-in depth %.6f in front "

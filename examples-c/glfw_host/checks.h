@@ -16,7 +16,8 @@ typedef struct frame_view {
     float view[16], projection[16];
     lv_vec3 eye;
     int width, height; /* framebuffer, pixels */
-    float exposure;
+    float exposure;           /* the room's tone-mapping exposure, m²/cd */
+    float luminaire_exposure; /* lumiview's layer (the luminaires' own luminance), m²/cd */
     bool half_float;   /* the colour target is RGBA16F (luminance above 65504 cd/m² overflows) */
 } frame_view;
 
@@ -29,7 +30,7 @@ typedef struct frame_view {
 bool check_probe(const scene *s, const lumi_context *ctx, lumi_instance inst, lv_vec3 p);
 
 /* Pixel (x, y), counted from the top-left like the screenshot, of the back buffer after compositing.
- * Predicts the luminaire's value tonemap(L(C, γ) · exposure), (C, γ) the direction from its
+ * Predicts the luminaire's value tonemap(L(C, γ) · luminaire_exposure), (C, γ) the direction from its
  * photometric centre to the eye (lumi_luminaire_sample), and the room's value along the pixel's ray
  * (ray cast into the boxes; E from lumi_instance_illuminance plus the uniform indirect term;
  * tonemap(ρ E / π · exposure)). Whichever is nearer (lumiview's depth at the pixel against the room
@@ -46,7 +47,7 @@ bool check_luminaire_pixel(const scene *s, const lumi_context *ctx, lumi_luminai
  * translation, on the bundled scan's opaque centre tile). It must be lumiview's (its depth nearer
  * than the room's along the pixel's ray; choose a view where it is). With the proxy
  * (`proxy_expected`): lumiview's luminance there is the scan's ground truth LV_SCAN_CENTRE_CD_M2 within
- * NEARFIELD_TOLERANCE, and the composited pixel shows tonemap(L_truth · exposure) within
+ * NEARFIELD_TOLERANCE, and the composited pixel shows tonemap(L_truth · luminaire_exposure) within
  * PIXEL_TOLERANCE. Without: lumiview drew something there (no ground truth: the cameras are sampled
  * along the view direction), and the composite shows tonemap of lumiview's own value. */
 #define NEARFIELD_TOLERANCE 0.02

@@ -6,7 +6,8 @@
  * loaded through the same lumi_luminaire_load_ex call. See examples-c/README.md for the flags and
  * what each check proves.
  *
- * Interactive: drag to orbit, scroll to zoom, +/- exposure, S solid overlay, H housing overlay,
+ * Interactive: drag to orbit, scroll to zoom, +/- exposure, [/] the luminaires' own exposure, S solid
+ * overlay, H housing overlay,
  * 1/2/3 near-field selection nearest/idw4/continuous, P near-field proxy on/off (printed and shown in
  * the title), Esc quits. Test mode (any of --frames, --screenshot, --probe, --check-luminaire-pixel,
  * --check-nearfield-pixel): runs N frames (default 1), runs the checks on the last one and exits
@@ -57,7 +58,7 @@ typedef struct options {
     bool has_camera, has_target, occluder, indirect, check_pixel, validation, test_uuid_mismatch;
     lv_vec3 camera, target;
     long check_x, check_y;
-    double exposure;
+    double exposure, luminaire_exposure;
     long width, height;
     bool color32;
     uint32_t overlays;
@@ -67,7 +68,7 @@ typedef struct options {
 typedef struct app {
     double yaw_deg, pitch_deg, distance;
     lv_vec3 target;
-    double exposure;
+    double exposure, luminaire_exposure;
     uint32_t overlays;
     uint32_t nf_mode;
     bool nf_proxy, nf_dirty;
@@ -93,6 +94,8 @@ static void usage(FILE *f) {
             "  --occluder on|off            the cabinet between the test view and the luminaire (default on)\n"
             "  --indirect on|off            uniform inter-reflected illuminance (default on)\n"
             "  --exposure E                 tone-mapping exposure, m^2/cd (default 0.02)\n"
+            "  --luminaire-exposure E       exposure of lumiview's layer, the luminaires' own luminance (default: --exposure;\n"
+            "                               lower shows the pattern of a source far brighter than the room; keys [ and ])\n"
             "  --size WxH                   framebuffer size (default 801x601)\n"
             "  --color-format rgba16f|rgba32f  lumiview's colour target (default rgba16f)\n"
             "  --overlays none|solid|housing|both  lumiview's overlays at start (keys S and H toggle them)\n"
@@ -181,6 +184,8 @@ static int parse_args(int argc, char **argv, options *o) {
             bad = !parse_on_off(v, &o->indirect);
         } else if (strcmp(a, "--exposure") == 0) {
             bad = !lv_parse_double(v, &o->exposure) || !(o->exposure > 0.0);
+        } else if (strcmp(a, "--luminaire-exposure") == 0) {
+            bad = !lv_parse_double(v, &o->luminaire_exposure) || !(o->luminaire_exposure > 0.0);
         } else if (strcmp(a, "--size") == 0) {
             bad = !lv_parse_size(v, &o->width, &o->height);
         } else if (strcmp(a, "--overlays") == 0) {
@@ -239,9 +244,17 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods) {
     switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
     case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD: a->exposure *= 1.25; break;
+    case GLFW_KEY_KP_ADD:
+        a->exposure *= 1.25;
+        a->luminaire_exposure *= 1.25;
+        break;
     case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT: a->exposure /= 1.25; break;
+    case GLFW_KEY_KP_SUBTRACT:
+        a->exposure /= 1.25;
+        a->luminaire_exposure /= 1.25;
+        break;
+    case GLFW_KEY_RIGHT_BRACKET: a->luminaire_exposure *= 1.25; break;
+    case GLFW_KEY_LEFT_BRACKET: a->luminaire_exposure /= 1.25; break;
     case GLFW_KEY_S:
         if (action == GLFW_PRESS) a->overlays ^= LUMI_OVERLAY_SOLID;
         break;
@@ -484,6 +497,7 @@ int main(int argc, char **argv) {
     app a;
     memset(&a, 0, sizeof a);
     a.exposure = o.exposure;
+    a.luminaire_exposure = o.luminaire_exposure > 0.0 ? o.luminaire_exposure : o.exposure;
     a.overlays = o.overlays;
     a.nf_mode = o.nf_mode;
     a.nf_proxy = o.nf_proxy;
@@ -520,6 +534,7 @@ int main(int argc, char **argv) {
         fv.width = fb_w;
         fv.height = fb_h;
         fv.exposure = (float)a.exposure;
+        fv.luminaire_exposure = (float)a.luminaire_exposure;
         fv.half_float = !o.color32;
         if (!lv_mat4_look_at(fv.view, fv.eye, a.target, lv_vec3_make(0, 1, 0))) {
             fprintf(stderr, "glfw_host: degenerate camera (looking straight up or down?)\n");
@@ -549,7 +564,7 @@ int main(int argc, char **argv) {
         cam.origin = LUMI_ORIGIN_BOTTOM_LEFT; /* memory row 0 = bottom row, like GL textures */
         lumi_render_options ro = lumi_render_options_default();
         ro.output = LUMI_OUTPUT_LUMINANCE;
-        ro.exposure = fv.exposure;
+        ro.exposure = fv.luminaire_exposure;
         ro.overlays = a.overlays;
         if (!lv_lumi_ok(lumi_render(ctx, target, &cam, &ro), "lumi_render")) {
             failed = true;
@@ -563,7 +578,7 @@ int main(int argc, char **argv) {
         glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         scene_draw_room(&sc, fv.view, fv.projection, fv.exposure);
-        scene_composite(&sc, color.texture, depth.texture, fv.exposure);
+        scene_composite(&sc, color.texture, depth.texture, fv.luminaire_exposure);
         if (!lv_gl_ok("drawing a frame")) {
             failed = true;
             break;
@@ -586,8 +601,9 @@ int main(int argc, char **argv) {
         glfwSwapBuffers(win);
         glfwPollEvents();
         if (!o.frames) {
-            char title[192];
-            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd%s%s%s%s%s", a.exposure,
+            char title[224];
+            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd, luminaires %.3g (+/-, [/])%s%s%s%s%s",
+                     a.exposure, a.luminaire_exposure,
                      a.overlays & LUMI_OVERLAY_SOLID ? " [solid]" : "", a.overlays & LUMI_OVERLAY_HOUSING ? " [housing]" : "",
                      nf_inst ? " - near-field: " : "", nf_inst ? lv_selection_name(a.nf_mode) : "",
                      nf_inst ? (a.nf_proxy && nf_has_proxy ? " + proxy (1/2/3, P)" : ", no proxy (1/2/3, P)") : "");
