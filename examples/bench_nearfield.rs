@@ -357,6 +357,8 @@ fn run(a: &Args) -> Res<serde_json::Value> {
             ("nearest", SelectionMode::Nearest, false),
             ("idw4", SelectionMode::Idw4, false),
             ("continuous", SelectionMode::Continuous, false),
+            ("nearest+proxy", SelectionMode::Nearest, true),
+            ("idw4+proxy", SelectionMode::Idw4, true),
             ("continuous+proxy", SelectionMode::Continuous, true),
         ] {
             r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy })?;

@@ -108,6 +108,10 @@ override SLOTS_PER_CHUNK: u32 = 496u;
 override SELECTION: u32 = 2u;
 override PROXY: bool = false;
 
+// The proxy has a hierarchy for the visibility test (src/nearfield/bvh.rs); a planar proxy has none
+// (it cannot block the path from a point on it to a camera), and its pipelines leave the test out.
+override VISIBILITY: bool = true;
+
 // Continuous mode without a proxy, drawn as the triangle raster (src/gpu/lit_bound.rs): each polygon
 // covers one selection triangle's region (vertex attribute `tri`) and the fragment takes that
 // triangle's weights directly, without the cell search.
@@ -568,7 +572,7 @@ fn shade(in: VsOut) -> Shaded {
     // (Written as plain loops: lavapipe ran the pass 1.6× slower, in every mode, with this in a
     // helper function returning a struct.)
     var blocked = vec4<bool>(false);
-    if (proxy && lum.bvh.z != 0u) {
+    if (PROXY && VISIBILITY && lum.bvh.z != 0u) {
         var n_blocked = 0u;
         var n_valid = 0u;
         for (var i = 0u; i < n_cams; i = i + 1u) {

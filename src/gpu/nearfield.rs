@@ -133,6 +133,8 @@ pub struct NearfieldLuminaire {
     /// The directions each camera's tile box covers, for the bounding polygon (bounding mode).
     lit: LitDirections,
     bounding_polygon: bool,
+    /// Whether the proxy has a hierarchy for the visibility test (a planar one needs none).
+    has_bvh: bool,
     bind: wgpu::BindGroup,
     bounds: (wgpu::Buffer, u32),
     proxy: Option<(wgpu::Buffer, u32)>,
@@ -441,6 +443,8 @@ struct PipelineKey {
     selection: u32,
     /// The shader's `PROXY`.
     proxy: bool,
+    /// The shader's `VISIBILITY`: the luminaire's proxy has a hierarchy (it is not planar).
+    visibility: bool,
     /// Faces culled: none for a proxy, back faces of the bounding box from outside it, front faces
     /// from inside.
     cull: Option<wgpu::Face>,
@@ -701,7 +705,12 @@ impl NearfieldPass {
             // The proxy's BVH for the visibility test (src/nearfield/bvh.rs): nodes, then triangles,
             // after the selection triangles in the same buffer (one binding fewer: lavapipe runs the
             // pass ~1.5× slower with a 17th storage buffer in the fragment stage).
-            let bvh = proxy.as_deref().map(ProxyBvh::build).transpose()?;
+            // A planar proxy cannot block itself: no hierarchy, and pipelines without the test.
+            let bvh = proxy
+                .as_deref()
+                .filter(|p| !crate::nearfield::bvh::is_planar(p))
+                .map(ProxyBvh::build)
+                .transpose()?;
             let mut geometry = g.triangles.clone();
             let bvh_bases = match &bvh {
                 Some(b) => {
@@ -885,6 +894,7 @@ impl NearfieldPass {
                 pool_layout,
                 lit: LitDirections::new(set, &pack, &selection),
                 bounding_polygon: opts.bounding_polygon,
+                has_bvh: bvh.is_some(),
                 bind,
                 bounds,
                 proxy: proxy_buf,
@@ -951,6 +961,7 @@ impl NearfieldPass {
                             ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
                             ("SELECTION", f64::from(key.selection)),
                             ("PROXY", f64::from(u8::from(key.proxy))),
+                            ("VISIBILITY", f64::from(u8::from(key.visibility))),
                             (
                                 "TRIANGLES",
                                 f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
@@ -1094,6 +1105,7 @@ impl NearfieldPass {
                     pool_layout: lum.pool_layout,
                     selection,
                     proxy,
+                    visibility: lum.has_bvh,
                     cull,
                     polygon,
                 },

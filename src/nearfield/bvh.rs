@@ -33,6 +33,31 @@ pub const MAX_DEPTH: usize = 32;
 /// Largest proxy accepted (triangles): keeps the GPU buffer under 128 MiB.
 pub const MAX_TRIANGLES: usize = 2_000_000;
 
+/// Whether a triangle list (three vertices per triangle) lies in one plane, within 10⁻⁶ of its extent.
+/// Such a proxy cannot block the segment from a point on it to a camera off its plane (the segment
+/// meets the plane only at that point), so it needs no hierarchy and no visibility test.
+pub fn is_planar(vertices: &[[f32; 3]]) -> bool {
+    let v: Vec<Vec3> = vertices.iter().map(|p| Vec3::from(*p)).collect();
+    let (lo, hi) = v.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let extent = (hi - lo).length();
+    if !extent.is_finite() || extent <= 0.0 {
+        return false;
+    }
+    // The plane of the triangle with the largest area.
+    let Some((p0, n)) = v
+        .chunks_exact(3)
+        .map(|t| (t[0], (t[1] - t[0]).cross(t[2] - t[0])))
+        .max_by(|a, b| a.1.length_squared().total_cmp(&b.1.length_squared()))
+    else {
+        return false;
+    };
+    let n = n.normalize_or_zero();
+    n != Vec3::ZERO && v.iter().all(|p| (*p - p0).dot(n).abs() <= 1e-6 * extent)
+}
+
 /// A built hierarchy in its GPU layout.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ProxyBvh {
@@ -256,6 +281,21 @@ mod tests {
             }
         }
         assert!(blocked > 500 && blocked < 3000, "{blocked}");
+    }
+
+    #[test]
+    fn planar_meshes_are_told_apart() {
+        let mut flat = quad(0.0, -0.1, 0.1, -0.1, 0.1);
+        flat.extend(quad(0.0, 0.2, 0.3, -0.1, 0.1));
+        assert!(is_planar(&flat));
+        // Tilted, still one plane.
+        let tilted: Vec<[f32; 3]> = flat.iter().map(|p| [p[0], p[1] * 0.6, p[1] * 0.8 + 0.3]).collect();
+        assert!(is_planar(&tilted));
+        let mut two = flat.clone();
+        two.extend(quad(0.05, -0.1, 0.1, -0.1, 0.1));
+        assert!(!is_planar(&two));
+        assert!(!is_planar(&[]));
+        assert!(!is_planar(&[[0.0; 3]; 3]));
     }
 
     #[test]
