@@ -4,8 +4,8 @@
 //! sphere, selects cameras around Q, and samples each selected camera j at the pixel `K_j · R_j · v`
 //! (the view ray rotated into the camera; see shaders/nearfield.wgsl). So the pixel can hold light only
 //! if, for some camera j the view can select,
-//! - v lies in D_j, the cone of directions camera j maps into its box of kept tiles (widened by a
-//!   pixel for the bilinear footprint): four corner directions, and
+//! - v lies in D_j, the cone of directions camera j maps into the convex hull of its kept tiles
+//!   (widened by a pixel for the bilinear footprint), and
 //! - Q lies where j can be selected: within ρ_j (great-circle) of j's vertex, ρ_j being the farthest a
 //!   point selecting j can be (continuous: j's longest edge to a neighbour in a non-hole triangle, as a
 //!   point of a triangle is nearest its farthest vertex at a vertex; nearest: the largest circumradius
@@ -24,15 +24,18 @@
 //! cone of directions is wider than the luminaire as seen from the eye.
 
 use glam::{DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
+use rayon::prelude::*;
 
-use crate::nearfield::pack::Pack;
+use crate::nearfield::pack::{Pack, EMPTY_TILE};
 use crate::nearfield::select::{Selection, SelectionMode};
 use crate::nearfield::RayImageSet;
 
 /// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
 #[derive(Debug, Clone)]
 struct CameraCone {
-    corners: [Vec3; 4],
+    /// Unit directions (luminaire frame) of the corners of the convex hull of the camera's kept
+    /// tiles (each widened by a pixel for the bilinear footprint): the edges of its cone D.
+    corners: Vec<Vec3>,
     /// Unit direction of the camera's selection vertex from the capture centre.
     vertex: DVec3,
     /// ρ for nearest, idw4, continuous.
@@ -85,29 +88,47 @@ impl LitDirections {
                 *slot = Some(v);
             }
         }
-        let cameras = set
-            .cameras
-            .iter()
-            .zip(pack.images())
-            .enumerate()
-            .map(|(i, (c, e))| {
+        // In parallel: the tile tables of a full-size scan hold hundreds of millions of entries.
+        let cameras = (0..set.cameras.len().min(pack.images().len()))
+            .into_par_iter()
+            .map(|i| {
+                let (c, e) = (&set.cameras[i], &pack.images()[i]);
                 let v = vertex_of[i]?;
                 if e.bbox.w == 0 || e.bbox.h == 0 {
                     return None;
                 }
                 let k = set.intrinsics_of(i);
-                let x0 = f64::from(e.bbox.x0) * t - 1.0;
-                let y0 = f64::from(e.bbox.y0) * t - 1.0;
-                let x1 = (f64::from(e.bbox.x0 + e.bbox.w) * t).min(f64::from(e.width)) + 1.0;
-                let y1 = (f64::from(e.bbox.y0 + e.bbox.h) * t).min(f64::from(e.height)) + 1.0;
                 let dir = |px: f64, py: f64| {
                     let n = (DVec2::new(px, py) - k.principal_px) / k.focal_px;
                     (c.right * n.x + c.down * n.y + c.forward).normalize().as_vec3()
                 };
+                // Per tile row, the first and last kept tile (pixels, a pixel wider all round).
+                let table = pack.tile_table(i).unwrap_or(&[]);
+                let mut pts = Vec::new();
+                for r in 0..e.bbox.h as usize {
+                    let row = table
+                        .get(r * e.bbox.w as usize..(r + 1) * e.bbox.w as usize)
+                        .unwrap_or(&[]);
+                    let kept = |x: &u32| *x != EMPTY_TILE;
+                    let (Some(a), Some(b)) = (row.iter().position(kept), row.iter().rposition(kept)) else {
+                        continue;
+                    };
+                    let y0 = f64::from(e.bbox.y0 + r as u32) * t - 1.0;
+                    let y1 = (f64::from(e.bbox.y0 + r as u32 + 1) * t).min(f64::from(e.height)) + 1.0;
+                    let x0 = f64::from(e.bbox.x0 + a as u32) * t - 1.0;
+                    let x1 = (f64::from(e.bbox.x0 + b as u32 + 1) * t).min(f64::from(e.width)) + 1.0;
+                    for (x, y) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1)] {
+                        pts.push((x as f32, y as f32, ()));
+                    }
+                }
+                let hull = convex_hull(pts);
+                if hull.len() < 3 {
+                    return None;
+                }
                 // 1 % and 10⁻⁶ rad of margin over the exact radii (rounding at triangle edges).
                 let grow = |r: f64| r * 1.01 + 1e-6;
                 Some(CameraCone {
-                    corners: [dir(x0, y0), dir(x1, y0), dir(x1, y1), dir(x0, y1)],
+                    corners: hull.iter().map(|h| dir(f64::from(h.0), f64::from(h.1))).collect(),
                     vertex: dirs[v],
                     rho: [grow(circ[v]), grow(max_gap), grow(edge[v])],
                     cell: cells[v].clone().filter(|c| c.len() >= 3),
@@ -174,7 +195,7 @@ impl LitDirections {
                 oct.push(project(axis + (b1 * a.cos() + b2 * a.sin()) * tan_g)?);
             }
             let mut quad = Vec::with_capacity(4);
-            for d in cone.corners {
+            for d in &cone.corners {
                 quad.push(project(d.as_dvec3())?);
             }
             pts.extend(clip_convex(&oct, &quad));
@@ -314,7 +335,7 @@ impl LitDirections {
             let mut corners = Vec::with_capacity(12);
             for &v in tri {
                 if let Some(Some(cone)) = cams.get(v as usize).and_then(|&c| self.cameras.get(c as usize)) {
-                    for d in cone.corners {
+                    for d in &cone.corners {
                         let p = screen.px(dir4(d.as_dvec3()), 1.0)?;
                         corners.push((p.x, p.y, ()));
                     }
@@ -408,8 +429,8 @@ impl LitDirections {
             let Some(Some(cone)) = self.cameras.get(c as usize) else {
                 continue;
             };
-            let mut d = Vec::with_capacity(4);
-            for q in cone.corners {
+            let mut d = Vec::with_capacity(cone.corners.len());
+            for q in &cone.corners {
                 d.push(screen.px(Vec4::new(q.x, q.y, q.z, 0.0), 1.0)?);
             }
             // The cell's corners on the sphere: its Voronoi corners, or an octagon around the cap.
