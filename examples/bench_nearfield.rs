@@ -353,14 +353,15 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         let (c0, _) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
         let (t0, t0_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
         let mut modes = Vec::new();
-        for (label, mode, proxy) in [
+        let all = [
             ("nearest", SelectionMode::Nearest, false),
             ("idw4", SelectionMode::Idw4, false),
             ("continuous", SelectionMode::Continuous, false),
             ("nearest+proxy", SelectionMode::Nearest, true),
             ("idw4+proxy", SelectionMode::Idw4, true),
             ("continuous+proxy", SelectionMode::Continuous, true),
-        ] {
+        ];
+        for (label, mode, proxy) in all {
             r.set_nearfield_settings(inst, NearfieldSettings { mode, proxy })?;
             let (m, runs) = median_ms(
                 || {
@@ -376,6 +377,43 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                 .count();
             modes.push(json!({"mode": label, "median_ms": m, "runs_ms": runs,
                               "lit_fraction": lit as f64 / f64::from(w * h)}));
+        }
+        // Ratios from interleaved rounds: each round times both trivial passes and then every mode
+        // once (after an untimed frame in the new setting), and divides; the median over rounds. A
+        // shared machine's slow and fast phases last seconds, so a round sees one phase throughout.
+        let mut ratios = vec![(Vec::new(), Vec::new()); all.len()];
+        let time = |f: &mut dyn FnMut() -> Res<()>| -> Res<f64> {
+            let s = Instant::now();
+            f()?;
+            Ok(s.elapsed().as_secs_f64() * 1e3)
+        };
+        for _ in 0..a.runs {
+            let tc = time(&mut || trivial_compute.frame(&r))?;
+            let tr = time(&mut || trivial.frame(&r, &plain_view))?;
+            for (k, (_, mode, proxy)) in all.iter().enumerate() {
+                r.set_nearfield_settings(
+                    inst,
+                    NearfieldSettings {
+                        mode: *mode,
+                        proxy: *proxy,
+                    },
+                )?;
+                r.render(&mut target, &hc, &RenderOptions::default())?;
+                let t = time(&mut || {
+                    r.render(&mut target, &hc, &RenderOptions::default())?;
+                    Ok(())
+                })?;
+                ratios[k].0.push(t / tc);
+                ratios[k].1.push(t / tr);
+            }
+        }
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        for (m, (c, rr)) in modes.iter_mut().zip(ratios) {
+            m["ratio_compute"] = json!(median(c));
+            m["ratio_render"] = json!(median(rr));
         }
         // The frame's fixed cost: the same render call with the luminaire's instance removed.
         r.remove_instance(inst)?;

@@ -122,6 +122,11 @@ override TRIANGLES: bool = false;
 // selection and is kept only where it picks that camera, so overlapping cells write each pixel once.
 override CELLS: bool = false;
 
+// The draw is the content box: the fragment writes the stand-in depth itself (entry points fs_box*).
+// Proxy and polygon draws take the rasteriser's depth: the proxy's own, or the polygon's, which lies
+// on the stand-in plane already (src/gpu/lit_bound.rs), and write no frag_depth.
+override BOX: bool = false;
+
 // The pool chunk of pack chunk `c` (EMPTY: not resident).
 fn pool_chunk(c: u32) -> u32 {
     if (IDENTITY_MAP) {
@@ -609,6 +614,8 @@ fn shade(in: VsOut) -> Shaded {
         out.keep = true;
     } else {
         out.keep = l > 0.0;
+    }
+    if (BOX) {
         // Stand-in depth: the plane through the content centre facing the eye.
         var n: vec3<f32>;
         if (draw.eye_local.w > 0.5) {
@@ -643,16 +650,25 @@ fn color_of(l: f32) -> vec4<f32> {
 struct FsOut {
     @location(0) color: vec4<f32>,
     @location(1) depth: vec4<f32>,
-    @builtin(frag_depth) frag_depth: f32,
 };
 
 struct FsOutColor {
     @location(0) color: vec4<f32>,
+};
+
+struct FsBoxOut {
+    @location(0) color: vec4<f32>,
+    @location(1) depth: vec4<f32>,
     @builtin(frag_depth) frag_depth: f32,
 };
 
-@fragment
-fn fs_main(in: VsOut) -> FsOut {
+struct FsBoxOutColor {
+    @location(0) color: vec4<f32>,
+    @builtin(frag_depth) frag_depth: f32,
+};
+
+// Shades, counts a read of a missing chunk, and discards what is not drawn.
+fn shade_kept(in: VsOut) -> Shaded {
     let s = shade(in);
     if (missed) {
         atomicAdd(&misses[0], 1u);
@@ -660,17 +676,31 @@ fn fs_main(in: VsOut) -> FsOut {
     if (!s.keep) {
         discard;
     }
-    return FsOut(color_of(s.l), vec4<f32>(s.depth, 0.0, 0.0, 1.0), s.depth);
+    return s;
+}
+
+// With the host's depth as a colour attachment (depth copy) or without; the rasteriser's depth.
+@fragment
+fn fs_main(in: VsOut) -> FsOut {
+    let s = shade_kept(in);
+    return FsOut(color_of(s.l), vec4<f32>(s.depth, 0.0, 0.0, 1.0));
 }
 
 @fragment
 fn fs_main_color_only(in: VsOut) -> FsOutColor {
-    let s = shade(in);
-    if (missed) {
-        atomicAdd(&misses[0], 1u);
-    }
-    if (!s.keep) {
-        discard;
-    }
-    return FsOutColor(color_of(s.l), s.depth);
+    let s = shade_kept(in);
+    return FsOutColor(color_of(s.l));
+}
+
+// The content box: the stand-in depth written by the fragment.
+@fragment
+fn fs_box(in: VsOut) -> FsBoxOut {
+    let s = shade_kept(in);
+    return FsBoxOut(color_of(s.l), vec4<f32>(s.depth, 0.0, 0.0, 1.0), s.depth);
+}
+
+@fragment
+fn fs_box_color_only(in: VsOut) -> FsBoxOutColor {
+    let s = shade_kept(in);
+    return FsBoxOutColor(color_of(s.l), s.depth);
 }

@@ -453,6 +453,13 @@ struct PipelineKey {
     polygon: Option<PolygonKind>,
 }
 
+impl PipelineKey {
+    /// Drawing the content box (the fragment writes the stand-in depth).
+    fn is_box(&self) -> bool {
+        !self.proxy && self.polygon.is_none()
+    }
+}
+
 const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
 
 /// [`PolygonVertex`]: position and selection triangle.
@@ -950,10 +957,11 @@ impl NearfieldPass {
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
                     module: &self.module,
-                    entry_point: Some(if key.depth_copy {
-                        "fs_main"
-                    } else {
-                        "fs_main_color_only"
+                    entry_point: Some(match (key.depth_copy, key.is_box()) {
+                        (true, false) => "fs_main",
+                        (false, false) => "fs_main_color_only",
+                        (true, true) => "fs_box",
+                        (false, true) => "fs_box_color_only",
                     }),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants: &[
@@ -967,6 +975,7 @@ impl NearfieldPass {
                                 f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
                             ),
                             ("CELLS", f64::from(u8::from(key.polygon == Some(PolygonKind::Cells)))),
+                            ("BOX", f64::from(u8::from(key.is_box()))),
                             ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
                             ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
                             ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
