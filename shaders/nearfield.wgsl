@@ -356,6 +356,22 @@ fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
     }
     let start = lists[off + cell];
     let end = lists[off + cell + 1u];
+    if (!k4) {
+        // The largest cosine within the gap; the earlier list entry wins a tie (as below).
+        var best = -2.0;
+        var id = EMPTY;
+        for (var k = start; k < end; k = k + 1u) {
+            let v = verts[lists[items + k]];
+            let c = dot(u, v.xyz);
+            if (c >= lum.gap.x && c > best) {
+                best = c;
+                id = bitcast<u32>(v.w);
+            }
+        }
+        out.cam = vec4<u32>(id, EMPTY, EMPTY, EMPTY);
+        out.w = vec4<f32>(select(1.0, 0.0, id == EMPTY), 0.0, 0.0, 0.0);
+        return out;
+    }
     // Largest cosines first.
     var cs = vec4<f32>(-2.0);
     var ids = vec4<u32>(EMPTY);
@@ -387,11 +403,6 @@ fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
         }
     }
     if (ids.x == EMPTY) {
-        return out;
-    }
-    if (!k4) {
-        out.cam = vec4<u32>(ids.x, EMPTY, EMPTY, EMPTY);
-        out.w = vec4<f32>(1.0, 0.0, 0.0, 0.0);
         return out;
     }
     var w = vec4<f32>(0.0);

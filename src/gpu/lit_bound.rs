@@ -5,7 +5,7 @@
 //! (the view ray rotated into the camera; see shaders/nearfield.wgsl). So the pixel can hold light only
 //! if, for some camera j the view can select,
 //! - v lies in D_j, the cone of directions camera j maps into the convex hull of its kept tiles
-//!   (widened by a pixel for the bilinear footprint), and
+//!   (widened by the bilinear footprint), and
 //! - Q lies where j can be selected: within ρ_j (great-circle) of j's vertex, ρ_j being the farthest a
 //!   point selecting j can be (continuous: j's longest edge to a neighbour in a non-hole triangle, as a
 //!   point of a triangle is nearest its farthest vertex at a vertex; nearest: the largest circumradius
@@ -31,10 +31,18 @@ use crate::nearfield::select::{Selection, SelectionMode};
 use crate::nearfield::RayImageSet;
 
 /// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
+/// How far (camera pixels) a kept tile can light a sample outside it: the bilinear footprint reaches
+/// half a pixel beyond a texel centre; 0.1 more for rounding.
+const FOOTPRINT_PX: f64 = 0.6;
+
+/// The margin (screen pixels) a raster polygon is grown by beyond the sagitta of its arcs (×1.5):
+/// the rasteriser covers a pixel by its centre, so only rounding needs room.
+const GROW_PX: f32 = 0.25;
+
 #[derive(Debug, Clone)]
 struct CameraCone {
     /// Unit directions (luminaire frame) of the corners of the convex hull of the camera's kept
-    /// tiles (each widened by a pixel for the bilinear footprint): the edges of its cone D.
+    /// tiles (each widened by [`FOOTPRINT_PX`]): the edges of its cone D.
     corners: Vec<Vec3>,
     /// Unit direction of the camera's selection vertex from the capture centre.
     vertex: DVec3,
@@ -102,7 +110,7 @@ impl LitDirections {
                     let n = (DVec2::new(px, py) - k.principal_px) / k.focal_px;
                     (c.right * n.x + c.down * n.y + c.forward).normalize().as_vec3()
                 };
-                // Per tile row, the first and last kept tile (pixels, a pixel wider all round).
+                // Per tile row, the first and last kept tile (pixels, widened by the footprint).
                 let table = pack.tile_table(i).unwrap_or(&[]);
                 let mut pts = Vec::new();
                 for r in 0..e.bbox.h as usize {
@@ -113,10 +121,10 @@ impl LitDirections {
                     let (Some(a), Some(b)) = (row.iter().position(kept), row.iter().rposition(kept)) else {
                         continue;
                     };
-                    let y0 = f64::from(e.bbox.y0 + r as u32) * t - 1.0;
-                    let y1 = (f64::from(e.bbox.y0 + r as u32 + 1) * t).min(f64::from(e.height)) + 1.0;
-                    let x0 = f64::from(e.bbox.x0 + a as u32) * t - 1.0;
-                    let x1 = (f64::from(e.bbox.x0 + b as u32 + 1) * t).min(f64::from(e.width)) + 1.0;
+                    let y0 = f64::from(e.bbox.y0 + r as u32) * t - FOOTPRINT_PX;
+                    let y1 = (f64::from(e.bbox.y0 + r as u32 + 1) * t).min(f64::from(e.height)) + FOOTPRINT_PX;
+                    let x0 = f64::from(e.bbox.x0 + a as u32) * t - FOOTPRINT_PX;
+                    let x1 = (f64::from(e.bbox.x0 + b as u32 + 1) * t).min(f64::from(e.width)) + FOOTPRINT_PX;
                     for (x, y) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1)] {
                         pts.push((x as f32, y as f32, ()));
                     }
@@ -275,8 +283,8 @@ impl LitDirections {
     ///
     /// A pixel shows triangle T's blend when its line's first hit on the sphere lies in T. On the
     /// screen that region is T's three sphere points joined by the images of great-circle arcs, which
-    /// bow off the straight edges by at most the arcs' sagitta; each triangle is grown by that plus
-    /// one pixel, cut to the content ball's silhouette (an octagon around its cone: lines that miss the
+    /// bow off the straight edges by at most the arcs' sagitta; each triangle is grown by 1.5× that
+    /// plus [`GROW_PX`], cut to the content ball's silhouette (an octagon around its cone: lines that miss the
     /// ball are discarded anyway) and to the hull of its cameras' cones D (a line outside all three
     /// is dark), and placed on the plane through the centre facing the eye. The shader keeps a
     /// fragment only where the line's first hit lies in its own triangle (a small tolerance: a hair of
@@ -354,12 +362,12 @@ impl LitDirections {
             for k in 0..3 {
                 p[k] = screen.px(pt4(q[k]), screen.sign)?;
             }
-            let mut grow = 1.0f32;
+            let mut grow = GROW_PX;
             for k in 0..3 {
                 let (a, b) = (dirs[tri[k] as usize], dirs[tri[(k + 1) % 3] as usize]);
                 let arc = screen.px(pt4(centre + (a + b).normalize() * r_s), screen.sign)?;
                 let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                grow = grow.max(1.0 + (arc - chord).length() * 1.5);
+                grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
             }
             let Some(grown) = grow_triangle(p, grow) else {
                 continue;
@@ -395,7 +403,7 @@ impl LitDirections {
     /// The nearest-mode raster of a perspective view from `eye` (outside the content ball of radius
     /// `content_m`) for a `viewport` of pixels: per selectable camera, the screen region of its
     /// Voronoi cell (the lines whose first sphere hit is nearest to it; the convex hull of its
-    /// corners' images grown by the arcs' sagitta and a pixel; the cap of radius ρ where the cell is
+    /// corners' images grown by the arcs' sagitta and [`GROW_PX`]; the cap of radius ρ where the cell is
     /// open), cut to the content ball's silhouette and to the camera's own cone D; each vertex names
     /// the camera. The shader runs the usual nearest selection and keeps a fragment only where it
     /// picks the polygon's camera, so each pixel is written once however the grown cells overlap.
@@ -456,13 +464,13 @@ impl LitDirections {
             if hull.len() < 3 {
                 continue;
             }
-            // Grow by the largest sagitta of an edge's arc, and a pixel.
-            let mut grow = 1.0f32;
+            // Grow by the largest sagitta of an edge's arc, and the margin.
+            let mut grow = GROW_PX;
             for i in 0..hull.len() {
                 let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
                 let arc = on_sphere((a + b).normalize())?;
                 let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                grow = grow.max(1.0 + (arc - chord).length() * 1.5);
+                grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
             }
             let poly: Vec<Vec2> = hull.iter().map(|h| Vec2::new(h.0, h.1)).collect();
             let Some(grown) = grow_convex(&poly, grow) else {
