@@ -260,20 +260,23 @@ impl NearfieldLuminaire {
         viewport: (u32, u32),
         polygon: bool,
     ) -> (Vec<u32>, Option<(Vec<PolygonVertex>, PolygonKind)>) {
-        let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
-        let cams = self.selection.cameras_of_cells(mode, cells.iter().copied());
+        // Residency needs the cameras from the cell grid; the polygons the faster superset.
+        let resident = if self.fully_resident {
+            Vec::new()
+        } else {
+            self.cameras_for_view(eye, mode)
+        };
         if !polygon {
-            return (cams, None);
+            return (resident, None);
         }
+        let Some((cams, tris)) = self
+            .lit
+            .selectable(&self.selection, eye.truncate(), self.content_radius_m, mode)
+        else {
+            return (resident, None);
+        };
         // Continuous: the triangle raster; otherwise, or where it does not apply, the hull.
         if mode == SelectionMode::Continuous {
-            let mut tris: Vec<u32> = cells
-                .iter()
-                .flat_map(|&c| self.selection.cell_candidates(SelectionMode::Continuous, c))
-                .copied()
-                .collect();
-            tris.sort_unstable();
-            tris.dedup();
             let raster = self.lit.continuous_raster(
                 &self.selection,
                 &tris,
@@ -283,7 +286,7 @@ impl NearfieldLuminaire {
                 viewport,
             );
             if let Some(r) = raster {
-                return (cams, Some((r, PolygonKind::Triangles)));
+                return (resident, Some((r, PolygonKind::Triangles)));
             }
         }
         if mode == SelectionMode::Nearest {
@@ -291,7 +294,7 @@ impl NearfieldLuminaire {
                 self.lit
                     .nearest_raster(&cams, clip_from_local, eye.truncate(), self.content_radius_m, viewport);
             if let Some(r) = raster {
-                return (cams, Some((r, PolygonKind::Cells)));
+                return (resident, Some((r, PolygonKind::Cells)));
             }
         }
         let hull = self.lit.bound(&cams, mode, clip_from_local, eye.truncate()).map(|p| {
@@ -301,7 +304,7 @@ impl NearfieldLuminaire {
             });
             (v.collect(), PolygonKind::Hull)
         });
-        (cams, hull)
+        (resident, hull)
     }
 
     fn make_resident(&self, ctx: &GpuContext, cameras: &[u32]) -> Result<(), GpuError> {
