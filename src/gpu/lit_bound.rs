@@ -417,72 +417,78 @@ impl LitDirections {
         let cams = sel.vertex_camera();
         let local_from_clip = clip_from_local.inverse();
         let n = -axis;
-        let mut out = Vec::new();
-        for &t in triangles {
-            let ti = t as usize;
-            if sel.is_hole(ti) || sel.is_folded(ti) {
-                continue;
-            }
-            let Some(tri) = sel.triangles().get(ti) else {
-                continue;
-            };
-            // The hull of the cameras' cones (none lit: the whole triangle is dark).
-            let mut corners = Vec::with_capacity(12);
-            for &v in tri {
-                if let Some(Some(cone)) = cams.get(v as usize).and_then(|&c| self.cameras.get(c as usize)) {
-                    for d in &cone.corners {
-                        let p = screen.px(dir4(d.as_dvec3()), 1.0)?;
-                        corners.push((p.x, p.y, ()));
+        // Per item in parallel (a large scan's view holds thousands); any `None` gives up.
+        let per: Option<Vec<Vec<PolygonVertex>>> = triangles
+            .par_iter()
+            .with_min_len(16)
+            .map(|&t| -> Option<Vec<PolygonVertex>> {
+                let mut out = Vec::new();
+                let ti = t as usize;
+                if sel.is_hole(ti) || sel.is_folded(ti) {
+                    return Some(out);
+                }
+                let Some(tri) = sel.triangles().get(ti) else {
+                    return Some(out);
+                };
+                // The hull of the cameras' cones (none lit: the whole triangle is dark).
+                let mut corners = Vec::with_capacity(12);
+                for &v in tri {
+                    if let Some(Some(cone)) = cams.get(v as usize).and_then(|&c| self.cameras.get(c as usize)) {
+                        for d in &cone.corners {
+                            let p = screen.px(dir4(d.as_dvec3()), 1.0)?;
+                            corners.push((p.x, p.y, ()));
+                        }
                     }
                 }
-            }
-            let d_hull: Vec<Vec2> = convex_hull(corners)
-                .into_iter()
-                .map(|(x, y, ())| Vec2::new(x, y))
-                .collect();
-            if d_hull.len() < 3 || disjoint(&d_hull, &ball) {
-                continue;
-            }
-            // The triangle's sphere points and the arcs' sagitta, in pixels.
-            let q = tri.map(|v| centre + dirs[v as usize] * r_s);
-            let mut p = [Vec2::ZERO; 3];
-            for k in 0..3 {
-                p[k] = screen.px(pt4(q[k]), screen.sign)?;
-            }
-            let mut grow = GROW_PX;
-            for k in 0..3 {
-                let (a, b) = (dirs[tri[k] as usize], dirs[tri[(k + 1) % 3] as usize]);
-                let arc = screen.px(pt4(centre + (a + b).normalize() * r_s), screen.sign)?;
-                let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
-            }
-            let Some(grown) = grow_triangle(p, grow) else {
-                continue;
-            };
-            let poly = clip_convex(&clip_convex(&grown, &ball), &d_hull);
-            if poly.len() < 3 {
-                continue;
-            }
-            // Back onto the plane through the centre facing the eye (every line here crosses the
-            // ball, so in front of the eye).
-            let mut on_plane = Vec::with_capacity(poly.len());
-            for v in poly {
-                let ndc = v / screen.half;
-                let h = local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
-                let d = (h.truncate() / h.w).as_dvec3() - e;
-                let dn = d.dot(n);
-                if dn.is_nan() || dn >= -1e-9 * d.length() {
-                    return None;
+                let d_hull: Vec<Vec2> = convex_hull(corners)
+                    .into_iter()
+                    .map(|(x, y, ())| Vec2::new(x, y))
+                    .collect();
+                if d_hull.len() < 3 || disjoint(&d_hull, &ball) {
+                    return Some(out);
                 }
-                on_plane.push((e + d * (-dist_c / dn)).as_vec3().to_array());
-            }
-            for i in 1..on_plane.len() - 1 {
-                for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
-                    out.push(PolygonVertex { pos, tri: t });
+                // The triangle's sphere points and the arcs' sagitta, in pixels.
+                let q = tri.map(|v| centre + dirs[v as usize] * r_s);
+                let mut p = [Vec2::ZERO; 3];
+                for k in 0..3 {
+                    p[k] = screen.px(pt4(q[k]), screen.sign)?;
                 }
-            }
-        }
-        Some(out)
+                let mut grow = GROW_PX;
+                for k in 0..3 {
+                    let (a, b) = (dirs[tri[k] as usize], dirs[tri[(k + 1) % 3] as usize]);
+                    let arc = screen.px(pt4(centre + (a + b).normalize() * r_s), screen.sign)?;
+                    let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
+                    grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
+                }
+                let Some(grown) = grow_triangle(p, grow) else {
+                    return Some(out);
+                };
+                let poly = clip_convex(&clip_convex(&grown, &ball), &d_hull);
+                if poly.len() < 3 {
+                    return Some(out);
+                }
+                // Back onto the plane through the centre facing the eye (every line here crosses the
+                // ball, so in front of the eye).
+                let mut on_plane = Vec::with_capacity(poly.len());
+                for v in poly {
+                    let ndc = v / screen.half;
+                    let h = local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
+                    let d = (h.truncate() / h.w).as_dvec3() - e;
+                    let dn = d.dot(n);
+                    if dn.is_nan() || dn >= -1e-9 * d.length() {
+                        return None;
+                    }
+                    on_plane.push((e + d * (-dist_c / dn)).as_vec3().to_array());
+                }
+                for i in 1..on_plane.len() - 1 {
+                    for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
+                        out.push(PolygonVertex { pos, tri: t });
+                    }
+                }
+                Some(out)
+            })
+            .collect();
+        Some(per?.concat())
     }
 }
 
@@ -519,67 +525,73 @@ impl LitDirections {
         let pt4 = |q: DVec3| Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0);
         let on_sphere = |d: DVec3| screen.px(pt4(centre + d * r_s), screen.sign);
         let local_from_clip = clip_from_local.inverse();
-        let mut out = Vec::new();
-        for &c in cameras {
-            let Some(Some(cone)) = self.cameras.get(c as usize) else {
-                continue;
-            };
-            let mut d = Vec::with_capacity(cone.corners.len());
-            for q in &cone.corners {
-                d.push(screen.px(Vec4::new(q.x, q.y, q.z, 0.0), 1.0)?);
-            }
-            // A cone that misses the ball's silhouette: nothing to draw (most of a far view's cameras).
-            if disjoint(&d, &ball) {
-                continue;
-            }
-            // The cell's corners on the sphere: its Voronoi corners, or an octagon around the cap.
-            let corners: Vec<DVec3> = match &cone.cell {
-                Some(cell) => cell.clone(),
-                None => {
-                    let (b1, b2) = orthonormal(cone.vertex);
-                    let tan_r = cone.rho[0].min(1.4).tan() / (std::f64::consts::PI / 8.0).cos();
-                    (0..8)
-                        .map(|k| {
-                            let a = std::f64::consts::TAU * f64::from(k) / 8.0;
-                            (cone.vertex + (b1 * a.cos() + b2 * a.sin()) * tan_r).normalize()
-                        })
-                        .collect()
+        // Per item in parallel (a large scan's view holds thousands); any `None` gives up.
+        let per: Option<Vec<Vec<PolygonVertex>>> = cameras
+            .par_iter()
+            .with_min_len(16)
+            .map(|&c| -> Option<Vec<PolygonVertex>> {
+                let mut out = Vec::new();
+                let Some(Some(cone)) = self.cameras.get(c as usize) else {
+                    return Some(out);
+                };
+                let mut d = Vec::with_capacity(cone.corners.len());
+                for q in &cone.corners {
+                    d.push(screen.px(Vec4::new(q.x, q.y, q.z, 0.0), 1.0)?);
                 }
-            };
-            let mut pts = Vec::with_capacity(corners.len());
-            for q in &corners {
-                let p = on_sphere(*q)?;
-                pts.push((p.x, p.y, *q));
-            }
-            let hull = convex_hull(pts);
-            if hull.len() < 3 {
-                continue;
-            }
-            // Grow by the largest sagitta of an edge's arc, and the margin.
-            let mut grow = GROW_PX;
-            for i in 0..hull.len() {
-                let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
-                let arc = on_sphere((a + b).normalize())?;
-                let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
-            }
-            let poly: Vec<Vec2> = hull.iter().map(|h| Vec2::new(h.0, h.1)).collect();
-            let Some(grown) = grow_convex(&poly, grow) else {
-                continue;
-            };
-            let clipped = clip_convex(&clip_convex(&grown, &ball), &d);
-            emit_on_plane(
-                &clipped,
-                &screen,
-                &local_from_clip,
-                e,
-                to_c / dist_c,
-                dist_c,
-                c,
-                &mut out,
-            )?;
-        }
-        Some(out)
+                // A cone that misses the ball's silhouette: nothing to draw (most of a far view's cameras).
+                if disjoint(&d, &ball) {
+                    return Some(out);
+                }
+                // The cell's corners on the sphere: its Voronoi corners, or an octagon around the cap.
+                let corners: Vec<DVec3> = match &cone.cell {
+                    Some(cell) => cell.clone(),
+                    None => {
+                        let (b1, b2) = orthonormal(cone.vertex);
+                        let tan_r = cone.rho[0].min(1.4).tan() / (std::f64::consts::PI / 8.0).cos();
+                        (0..8)
+                            .map(|k| {
+                                let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+                                (cone.vertex + (b1 * a.cos() + b2 * a.sin()) * tan_r).normalize()
+                            })
+                            .collect()
+                    }
+                };
+                let mut pts = Vec::with_capacity(corners.len());
+                for q in &corners {
+                    let p = on_sphere(*q)?;
+                    pts.push((p.x, p.y, *q));
+                }
+                let hull = convex_hull(pts);
+                if hull.len() < 3 {
+                    return Some(out);
+                }
+                // Grow by the largest sagitta of an edge's arc, and the margin.
+                let mut grow = GROW_PX;
+                for i in 0..hull.len() {
+                    let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
+                    let arc = on_sphere((a + b).normalize())?;
+                    let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
+                    grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
+                }
+                let poly: Vec<Vec2> = hull.iter().map(|h| Vec2::new(h.0, h.1)).collect();
+                let Some(grown) = grow_convex(&poly, grow) else {
+                    return Some(out);
+                };
+                let clipped = clip_convex(&clip_convex(&grown, &ball), &d);
+                emit_on_plane(
+                    &clipped,
+                    &screen,
+                    &local_from_clip,
+                    e,
+                    to_c / dist_c,
+                    dist_c,
+                    c,
+                    &mut out,
+                )?;
+                Some(out)
+            })
+            .collect();
+        Some(per?.concat())
     }
 }
 
