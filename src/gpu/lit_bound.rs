@@ -33,11 +33,11 @@ use crate::nearfield::RayImageSet;
 /// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
 /// How far (camera pixels) a kept tile can light a sample outside it: the bilinear footprint reaches
 /// half a pixel beyond a texel centre; 0.1 more for rounding.
-const FOOTPRINT_PX: f64 = 0.6;
+pub const FOOTPRINT_PX: f64 = 0.6;
 
 /// The margin (screen pixels) a raster polygon is grown by beyond the sagitta of its arcs (×1.5):
 /// the rasteriser covers a pixel by its centre, so only rounding needs room.
-const GROW_PX: f32 = 0.25;
+pub const GROW_PX: f32 = 0.25;
 
 #[derive(Debug, Clone)]
 struct CameraCone {
