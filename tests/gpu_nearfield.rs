@@ -67,21 +67,7 @@ fn eye_camera(eye: DVec3, size: u32, fov_deg: f64) -> (Camera, Intrinsics) {
 }
 
 fn render(r: &mut Renderer, cam: &Camera, k: &Intrinsics) -> Vec<f32> {
-    let mut t = lumiview::gpu::RenderTarget::new(
-        &r.ctx,
-        &TargetDesc {
-            width: k.width,
-            height: k.height,
-            color: ColorFormat::Rgba32Float,
-            depth: DepthFormat::R32Float,
-            exportable: false,
-            semaphores: false,
-        },
-    )
-    .unwrap();
-    let hc = HostCamera::from_pinhole(cam, k, 0.01, 20.0);
-    r.render(&mut t, &hc, &RenderOptions::default()).unwrap();
-    let px = t.read(&r.ctx, Attachment::Color).unwrap();
+    let (px, _) = render_bytes(r, cam, k);
     let f: &[f32] = bytemuck::cast_slice(&px);
     f.chunks(4).map(|c| c[0]).collect()
 }

@@ -387,36 +387,9 @@ impl LitDirections {
         content_m: f64,
         viewport: (u32, u32),
     ) -> Option<Vec<PolygonVertex>> {
-        let (centre, r_s) = self.sphere;
-        let e = eye.as_dvec3();
-        let to_c = centre - e;
-        let dist_c = to_c.length();
-        if dist_c <= content_m * 1.0001 {
-            return None;
-        }
-        let screen = Screen {
-            clip_from_local,
-            half: Vec2::new(viewport.0 as f32, viewport.1 as f32) * 0.5,
-            sign: if (e - centre).length() > r_s { 1.0 } else { -1.0 },
-        };
-        let dir4 = |d: DVec3| Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0);
-        let pt4 = |q: DVec3| Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0);
-        // The content ball's silhouette: an octagon around its cone from the eye.
-        let axis = to_c / dist_c;
-        let tan_b = (content_m / dist_c).asin().tan() / (std::f64::consts::PI / 8.0).cos();
-        if tan_b > 5.0 {
-            return None;
-        }
-        let (b1, b2) = orthonormal(axis);
-        let mut ball = Vec::with_capacity(8);
-        for k in 0..8 {
-            let a = std::f64::consts::TAU * f64::from(k) / 8.0;
-            ball.push(screen.px(dir4(axis + (b1 * a.cos() + b2 * a.sin()) * tan_b), 1.0)?);
-        }
+        let view = self.view(clip_from_local, eye, content_m, viewport)?;
         let dirs = sel.vertex_directions();
         let cams = sel.vertex_camera();
-        let local_from_clip = clip_from_local.inverse();
-        let n = -axis;
         // Per item in parallel (a large scan's view holds thousands); any `None` gives up.
         let per: Option<Vec<Vec<PolygonVertex>>> = triangles
             .par_iter()
@@ -435,7 +408,7 @@ impl LitDirections {
                 for &v in tri {
                     if let Some(Some(cone)) = cams.get(v as usize).and_then(|&c| self.cameras.get(c as usize)) {
                         for d in &cone.corners {
-                            let p = screen.px(dir4(d.as_dvec3()), 1.0)?;
+                            let p = view.direction(*d)?;
                             corners.push((p.x, p.y, ()));
                         }
                     }
@@ -444,47 +417,21 @@ impl LitDirections {
                     .into_iter()
                     .map(|(x, y, ())| Vec2::new(x, y))
                     .collect();
-                if d_hull.len() < 3 || disjoint(&d_hull, &ball) {
+                if d_hull.len() < 3 || disjoint(&d_hull, &view.ball) {
                     return Some(out);
                 }
-                // The triangle's sphere points and the arcs' sagitta, in pixels.
-                let q = tri.map(|v| centre + dirs[v as usize] * r_s);
+                // The triangle's sphere points, grown by its arcs' sagitta.
                 let mut p = [Vec2::ZERO; 3];
-                for k in 0..3 {
-                    p[k] = screen.px(pt4(q[k]), screen.sign)?;
-                }
                 let mut grow = GROW_PX;
                 for k in 0..3 {
                     let (a, b) = (dirs[tri[k] as usize], dirs[tri[(k + 1) % 3] as usize]);
-                    let arc = screen.px(pt4(centre + (a + b).normalize() * r_s), screen.sign)?;
-                    let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                    grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
+                    p[k] = view.on_sphere(a)?;
+                    grow = grow.max(GROW_PX + view.sagitta(a, b)? * 1.5);
                 }
                 let Some(grown) = grow_triangle(p, grow) else {
                     return Some(out);
                 };
-                let poly = clip_convex(&clip_convex(&grown, &ball), &d_hull);
-                if poly.len() < 3 {
-                    return Some(out);
-                }
-                // Back onto the plane through the centre facing the eye (every line here crosses the
-                // ball, so in front of the eye).
-                let mut on_plane = Vec::with_capacity(poly.len());
-                for v in poly {
-                    let ndc = v / screen.half;
-                    let h = local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
-                    let d = (h.truncate() / h.w).as_dvec3() - e;
-                    let dn = d.dot(n);
-                    if dn.is_nan() || dn >= -1e-9 * d.length() {
-                        return None;
-                    }
-                    on_plane.push((e + d * (-dist_c / dn)).as_vec3().to_array());
-                }
-                for i in 1..on_plane.len() - 1 {
-                    for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
-                        out.push(PolygonVertex { pos, tri: t });
-                    }
-                }
+                view.emit(&clip_convex(&clip_convex(&grown, &view.ball), &d_hull), t, &mut out)?;
                 Some(out)
             })
             .collect();
@@ -509,22 +456,7 @@ impl LitDirections {
         content_m: f64,
         viewport: (u32, u32),
     ) -> Option<Vec<PolygonVertex>> {
-        let (centre, r_s) = self.sphere;
-        let e = eye.as_dvec3();
-        let to_c = centre - e;
-        let dist_c = to_c.length();
-        if dist_c <= content_m * 1.0001 {
-            return None;
-        }
-        let screen = Screen {
-            clip_from_local,
-            half: Vec2::new(viewport.0 as f32, viewport.1 as f32) * 0.5,
-            sign: if (e - centre).length() > r_s { 1.0 } else { -1.0 },
-        };
-        let ball = ball_octagon(&screen, to_c / dist_c, content_m / dist_c)?;
-        let pt4 = |q: DVec3| Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0);
-        let on_sphere = |d: DVec3| screen.px(pt4(centre + d * r_s), screen.sign);
-        let local_from_clip = clip_from_local.inverse();
+        let view = self.view(clip_from_local, eye, content_m, viewport)?;
         // Per item in parallel (a large scan's view holds thousands); any `None` gives up.
         let per: Option<Vec<Vec<PolygonVertex>>> = cameras
             .par_iter()
@@ -536,10 +468,10 @@ impl LitDirections {
                 };
                 let mut d = Vec::with_capacity(cone.corners.len());
                 for q in &cone.corners {
-                    d.push(screen.px(Vec4::new(q.x, q.y, q.z, 0.0), 1.0)?);
+                    d.push(view.direction(*q)?);
                 }
                 // A cone that misses the ball's silhouette: nothing to draw (most of a far view's cameras).
-                if disjoint(&d, &ball) {
+                if disjoint(&d, &view.ball) {
                     return Some(out);
                 }
                 // The cell's corners on the sphere: its Voronoi corners, or an octagon around the cap.
@@ -558,7 +490,7 @@ impl LitDirections {
                 };
                 let mut pts = Vec::with_capacity(corners.len());
                 for q in &corners {
-                    let p = on_sphere(*q)?;
+                    let p = view.on_sphere(*q)?;
                     pts.push((p.x, p.y, *q));
                 }
                 let hull = convex_hull(pts);
@@ -569,25 +501,13 @@ impl LitDirections {
                 let mut grow = GROW_PX;
                 for i in 0..hull.len() {
                     let (a, b) = (hull[i].2, hull[(i + 1) % hull.len()].2);
-                    let arc = on_sphere((a + b).normalize())?;
-                    let chord = screen.px(pt4(centre + (a + b) * (0.5 * r_s)), screen.sign)?;
-                    grow = grow.max(GROW_PX + (arc - chord).length() * 1.5);
+                    grow = grow.max(GROW_PX + view.sagitta(a, b)? * 1.5);
                 }
                 let poly: Vec<Vec2> = hull.iter().map(|h| Vec2::new(h.0, h.1)).collect();
                 let Some(grown) = grow_convex(&poly, grow) else {
                     return Some(out);
                 };
-                let clipped = clip_convex(&clip_convex(&grown, &ball), &d);
-                emit_on_plane(
-                    &clipped,
-                    &screen,
-                    &local_from_clip,
-                    e,
-                    to_c / dist_c,
-                    dist_c,
-                    c,
-                    &mut out,
-                )?;
+                view.emit(&clip_convex(&clip_convex(&grown, &view.ball), &d), c, &mut out)?;
                 Some(out)
             })
             .collect();
@@ -607,56 +527,110 @@ fn disjoint(a: &[Vec2], b: &[Vec2]) -> bool {
     ahi.x < blo.x || bhi.x < alo.x || ahi.y < blo.y || bhi.y < alo.y
 }
 
-/// The octagon (pixels) around the cone from the eye along `axis` of half-angle asin(`sin_half`).
-fn ball_octagon(screen: &Screen, axis: DVec3, sin_half: f64) -> Option<Vec<Vec2>> {
-    let tan_b = sin_half.min(1.0).asin().tan() / (std::f64::consts::PI / 8.0).cos();
-    if tan_b > 5.0 {
-        return None;
-    }
-    let (b1, b2) = orthonormal(axis);
-    let mut ball = Vec::with_capacity(8);
-    for k in 0..8 {
-        let a = std::f64::consts::TAU * f64::from(k) / 8.0;
-        let d = axis + (b1 * a.cos() + b2 * a.sin()) * tan_b;
-        ball.push(screen.px(Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0), 1.0)?);
-    }
-    Some(ball)
-}
-
-/// Appends a convex polygon (pixels) as a fan of triangles on the plane through the centre facing
-/// the eye (`axis` from the eye to the centre, `dist` away), every vertex naming `tri`. `None` when a
-/// vertex's line does not cross the plane in front of the eye.
-#[allow(clippy::too_many_arguments)]
-fn emit_on_plane(
-    poly: &[Vec2],
-    screen: &Screen,
-    local_from_clip: &Mat4,
+/// One perspective view of the rasters: its screen, the content ball's silhouette, and the plane
+/// through the capture centre facing the eye that the polygons are placed on.
+struct View {
+    screen: Screen,
+    /// The silhouette: an octagon (pixels) around the ball's cone from the eye.
+    ball: Vec<Vec2>,
     eye: DVec3,
+    /// Unit, from the eye to the centre, and the distance.
     axis: DVec3,
     dist: f64,
-    tri: u32,
-    out: &mut Vec<PolygonVertex>,
-) -> Option<()> {
-    if poly.len() < 3 {
-        return Some(());
-    }
-    let mut on_plane = Vec::with_capacity(poly.len());
-    for v in poly {
-        let ndc = *v / screen.half;
-        let h = *local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
-        let d = (h.truncate() / h.w).as_dvec3() - eye;
-        let dn = d.dot(axis);
-        if dn.is_nan() || dn <= 1e-9 * d.length() {
+    local_from_clip: Mat4,
+    sphere: (DVec3, f64),
+}
+
+impl LitDirections {
+    /// The view from `eye` outside the content ball (radius `content_m`); `None` inside it, or when
+    /// the ball's cone is too wide to bound.
+    fn view(&self, clip_from_local: Mat4, eye: Vec3, content_m: f64, viewport: (u32, u32)) -> Option<View> {
+        let (centre, r_s) = self.sphere;
+        let e = eye.as_dvec3();
+        let to_c = centre - e;
+        let dist = to_c.length();
+        if dist <= content_m * 1.0001 {
             return None;
         }
-        on_plane.push((eye + d * (dist / dn)).as_vec3().to_array());
-    }
-    for i in 1..on_plane.len() - 1 {
-        for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
-            out.push(PolygonVertex { pos, tri });
+        let screen = Screen {
+            clip_from_local,
+            half: Vec2::new(viewport.0 as f32, viewport.1 as f32) * 0.5,
+            sign: if dist > r_s { 1.0 } else { -1.0 },
+        };
+        let axis = to_c / dist;
+        let tan_b = (content_m / dist).min(1.0).asin().tan() / (std::f64::consts::PI / 8.0).cos();
+        if tan_b > 5.0 {
+            return None;
         }
+        let (b1, b2) = orthonormal(axis);
+        let mut ball = Vec::with_capacity(8);
+        for k in 0..8 {
+            let a = std::f64::consts::TAU * f64::from(k) / 8.0;
+            let d = axis + (b1 * a.cos() + b2 * a.sin()) * tan_b;
+            ball.push(screen.px(Vec4::new(d.x as f32, d.y as f32, d.z as f32, 0.0), 1.0)?);
+        }
+        Some(View {
+            screen,
+            ball,
+            eye: e,
+            axis,
+            dist,
+            local_from_clip: clip_from_local.inverse(),
+            sphere: self.sphere,
+        })
     }
-    Some(())
+}
+
+impl View {
+    /// Pixel of a direction (at infinity).
+    fn direction(&self, d: Vec3) -> Option<Vec2> {
+        self.screen.px(Vec4::new(d.x, d.y, d.z, 0.0), 1.0)
+    }
+
+    /// Pixel of the lines whose first point on the sphere is at unit direction `u` from its centre.
+    fn on_sphere(&self, u: DVec3) -> Option<Vec2> {
+        self.point(self.sphere.0 + u * self.sphere.1)
+    }
+
+    fn point(&self, q: DVec3) -> Option<Vec2> {
+        self.screen
+            .px(Vec4::new(q.x as f32, q.y as f32, q.z as f32, 1.0), self.screen.sign)
+    }
+
+    /// How far (pixels) the image of the great-circle arc between unit directions `a` and `b` bows
+    /// off the straight segment, at its middle.
+    fn sagitta(&self, a: DVec3, b: DVec3) -> Option<f32> {
+        let (centre, r_s) = self.sphere;
+        let arc = self.on_sphere((a + b).normalize())?;
+        let chord = self.point(centre + (a + b) * (0.5 * r_s))?;
+        Some((arc - chord).length())
+    }
+
+    /// Appends a convex polygon (pixels) as a fan of triangles on the plane through the centre
+    /// facing the eye, every vertex naming `tri`. `None` when a vertex's line does not cross the
+    /// plane in front of the eye.
+    fn emit(&self, poly: &[Vec2], tri: u32, out: &mut Vec<PolygonVertex>) -> Option<()> {
+        if poly.len() < 3 {
+            return Some(());
+        }
+        let mut on_plane = Vec::with_capacity(poly.len());
+        for v in poly {
+            let ndc = *v / self.screen.half;
+            let h = self.local_from_clip * Vec4::new(ndc.x, ndc.y, 0.5, 1.0);
+            let d = (h.truncate() / h.w).as_dvec3() - self.eye;
+            let dn = d.dot(self.axis);
+            if dn.is_nan() || dn <= 1e-9 * d.length() {
+                return None;
+            }
+            on_plane.push((self.eye + d * (self.dist / dn)).as_vec3().to_array());
+        }
+        for i in 1..on_plane.len() - 1 {
+            for pos in [on_plane[0], on_plane[i], on_plane[i + 1]] {
+                out.push(PolygonVertex { pos, tri });
+            }
+        }
+        Some(())
+    }
 }
 
 /// A convex polygon (pixels, either orientation) with each edge moved `d` pixels outwards; `None`
