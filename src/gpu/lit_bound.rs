@@ -633,11 +633,16 @@ impl View {
     }
 }
 
+/// Twice the signed area of a polygon (positive counter-clockwise, y up).
+fn twice_area(p: &[Vec2]) -> f32 {
+    (0..p.len()).map(|i| p[i].perp_dot(p[(i + 1) % p.len()])).sum()
+}
+
 /// A convex polygon (pixels, either orientation) with each edge moved `d` pixels outwards; `None`
 /// when degenerate.
 fn grow_convex(p: &[Vec2], d: f32) -> Option<Vec<Vec2>> {
     let n = p.len();
-    let area: f32 = (0..n).map(|i| p[i].perp_dot(p[(i + 1) % n])).sum();
+    let area = twice_area(p);
     if area.is_nan() || area.abs() <= 1e-6 {
         return None;
     }
@@ -700,10 +705,7 @@ fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
 /// The intersection of two convex polygons (either orientation): `subject` clipped by each edge of
 /// `clip` (Sutherland–Hodgman).
 fn clip_convex(subject: &[Vec2], clip: &[Vec2]) -> Vec<Vec2> {
-    let area: f32 = (0..clip.len())
-        .map(|i| clip[i].perp_dot(clip[(i + 1) % clip.len()]))
-        .sum();
-    let orient = if area >= 0.0 { 1.0 } else { -1.0 };
+    let orient = if twice_area(clip) >= 0.0 { 1.0 } else { -1.0 };
     let mut out = subject.to_vec();
     for i in 0..clip.len() {
         let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
@@ -771,7 +773,7 @@ mod tests {
             Vec2::new(2.0, 0.0),
         ];
         let g = grow_convex(&sq, 1.0).unwrap();
-        let area: f32 = (0..g.len()).map(|i| g[i].perp_dot(g[(i + 1) % g.len()])).sum::<f32>() * 0.5;
+        let area = 0.5 * twice_area(&g);
         assert!((area.abs() - 16.0).abs() < 1e-4, "{g:?}");
         let t = grow_triangle([Vec2::new(0.0, 0.0), Vec2::new(4.0, 0.0), Vec2::new(0.0, 3.0)], 0.5).unwrap();
         // Every original vertex lies inside the grown triangle, at least 0.5 from each edge.
@@ -801,7 +803,7 @@ mod tests {
             Vec2::new(3.0, 1.0),
         ];
         let c = clip_convex(&a, &b);
-        let area: f32 = (0..c.len()).map(|i| c[i].perp_dot(c[(i + 1) % c.len()])).sum::<f32>() * 0.5;
+        let area = 0.5 * twice_area(&c);
         assert!((area.abs() - 1.0).abs() < 1e-5, "{c:?}");
         let far = [Vec2::new(5.0, 5.0), Vec2::new(6.0, 5.0), Vec2::new(6.0, 6.0)];
         assert!(clip_convex(&a, &far).is_empty());
