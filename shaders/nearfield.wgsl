@@ -179,32 +179,43 @@ fn camera(i: u32) -> Cam {
     return cam;
 }
 
-// Set by texel() when a read needed a chunk that is not resident (the fragment then counts once in
-// `misses`; the CPU makes every chunk a frame can read resident, and the tests assert 0).
+// Set by footprint() when a read needed a chunk that is not resident (the fragment then counts once
+// in `misses`; the CPU makes every chunk a frame can read resident, and the tests assert 0).
 var<private> missed: bool = false;
 
-// Stored luminance (cd/m²) of pixel (col, row) of a camera; 0 outside the image, outside the camera's
-// tile box, where no tile is kept, or (setting `missed`) where a chunk is not resident.
+// Floor division by the tile edge (also left of the image, where col < 0).
+fn tile_of(x: i32) -> i32 {
+    let t = i32(TILE_EDGE);
+    return select((x + 1) / t - 1, x / t, x >= 0);
+}
+
+// Stored luminance (cd/m²) of the bilinear footprint of texels (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
+// (x0 + 1, y0 + 1) of a camera; 0 outside the image, outside the camera's tile box, where no tile is
+// kept, or (setting `missed`) where a chunk is not resident.
+//
+// The whole footprint lies in the GPU slot of the tile holding (x0, y0) (src/gpu/residency.rs): the
+// tile's own values, then its apron (the 2T + 1 values right of and below it, f32). So a footprint
+// costs one tile-table entry and one header; the tile is clamped into the camera's tile box, since a
+// footprint starting just left of or above the box reaches into its first tile (the texels outside
+// the box are dark). The pack's tables point tiles without light next to lit ones at apron-only slots.
 //
 // Written without early returns: every lane runs the same straight line of loads and selects. On a
-// SIMD rasteriser (lavapipe) the nested early-return version cost 1.7× the frame time (88 → 52 ms,
-// nearest, bench-nearfield at 640×360), as divergent branches run both sides for every lane anyway.
-//
-// The pack's tile table entry of the pixel's tile gives a slot (EMPTY: no light); the slot's first
-// word is its scale (> 0: fp16 values × scale follow, two per word; ≤ 0: f32 values follow).
-fn texel(cam: Cam, col: i32, row: i32) -> f32 {
-    let t = TILE_EDGE;
-    let c = u32(col);
-    let r = u32(row);
-    // Tile position in the camera's tile box (wraps to a huge value left of or above it).
-    let bx = c / t - cam.bbox.x;
-    let by = r / t - cam.bbox.y;
-    let in_box = col >= 0 && row >= 0 && c < cam.size.x && r < cam.size.y && bx < cam.bbox.z && by < cam.bbox.w;
-    let entry = cam.table + select(0u, by * cam.bbox.z + bx, in_box);
+// SIMD rasteriser (lavapipe) the nested early-return version cost 1.7× the frame time, as divergent
+// branches run both sides for every lane anyway.
+fn footprint(cam: Cam, x0: i32, y0: i32) -> vec4<f32> {
+    let t = i32(TILE_EDGE);
+    let has_box = cam.bbox.z > 0u && cam.bbox.w > 0u;
+    let bx = clamp(tile_of(x0) - i32(cam.bbox.x), 0, max(i32(cam.bbox.z) - 1, 0));
+    let by = clamp(tile_of(y0) - i32(cam.bbox.y), 0, max(i32(cam.bbox.w) - 1, 0));
+    // (x0, y0) relative to that tile: −1…T − 1 where the footprint meets it.
+    let lx = x0 - (i32(cam.bbox.x) + bx) * t;
+    let ly = y0 - (i32(cam.bbox.y) + by) * t;
+    let near = has_box && lx >= -1 && lx < t && ly >= -1 && ly < t;
+    let entry = cam.table + u32(by) * cam.bbox.z + u32(bx);
     let tchunk = pool_chunk(entry / TABLE_PER_CHUNK);
     let t_ok = tchunk != EMPTY;
     let slot = pool_word(select(0u, tchunk, t_ok), entry % TABLE_PER_CHUNK);
-    let has_tile = in_box && t_ok && slot != EMPTY;
+    let has_tile = near && t_ok && slot != EMPTY;
     let sl = select(0u, slot, has_tile);
     let per = SLOTS_PER_CHUNK;
     let schunk = pool_chunk(lum.grid.z + sl / per);
@@ -212,13 +223,31 @@ fn texel(cam: Cam, col: i32, row: i32) -> f32 {
     let sc = select(0u, schunk, s_ok);
     let base = (sl % per) * SLOT_WORDS;
     let scale = bitcast<f32>(pool_word(sc, base));
-    let k = (r % t) * t + (c % t);
+    // The header: > 0 an fp16 tile's scale (its apron ends the slot), else an f32 tile (two slots,
+    // the apron after its T² values).
     let half = scale > 0.0;
-    let word = pool_word(sc, base + 1u + select(k, k / 2u, half));
-    let pair = unpack2x16float(word);
-    let v = select(bitcast<f32>(word), select(pair.x, pair.y, (k & 1u) == 1u) * scale, half);
-    missed = missed || (in_box && !t_ok) || (has_tile && !s_ok);
-    return select(0.0, v, has_tile && s_ok);
+    let apron = select(1u + TILE_EDGE * TILE_EDGE, SLOT_WORDS - 2u * TILE_EDGE - 1u, half);
+    let ok = has_tile && s_ok;
+    missed = missed || (near && !t_ok) || (has_tile && !s_ok);
+    var v = vec4<f32>(0.0);
+    for (var j = 0u; j < 4u; j = j + 1u) {
+        let dx = i32(j & 1u);
+        let dy = i32(j >> 1u);
+        let x = lx + dx;
+        let y = ly + dy;
+        let in_image = u32(x0 + dx) < cam.size.x && u32(y0 + dy) < cam.size.y;
+        let reach = x >= 0 && y >= 0;
+        let inner = x < t && y < t;
+        let k = u32(y * t + x);
+        // Apron order: the column right of the tile (rows 0…T), then the row below (columns 0…T − 1).
+        let a = select(u32(t + 1 + x), u32(y), x == t);
+        let w = select(apron + a, 1u + select(k, k / 2u, half), inner);
+        let word = pool_word(sc, base + select(0u, w, ok && reach));
+        let pair = unpack2x16float(word);
+        let value = select(bitcast<f32>(word), select(pair.x, pair.y, (k & 1u) == 1u) * scale, inner && half);
+        v[j] = select(0.0, value, ok && reach && in_image);
+    }
+    return v;
 }
 
 // Bilinear luminance at pixel coordinates (x, y) (pixel centres at +0.5). With `lit_only` (proxy
@@ -231,12 +260,7 @@ fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
     let f0 = floor(s);
     let f = s - f0;
     let i = vec2<i32>(f0);
-    let t = vec4<f32>(
-        texel(cam, i.x, i.y),
-        texel(cam, i.x + 1, i.y),
-        texel(cam, i.x, i.y + 1),
-        texel(cam, i.x + 1, i.y + 1)
-    );
+    let t = footprint(cam, i.x, i.y);
     let w = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
     let l = dot(w, t);
     if (!lit_only) {

@@ -757,7 +757,7 @@ impl NearfieldPass {
             let chunks_per_page = (max_binding / CHUNK_BYTES).max(1) as u32;
             let pool_layout = PoolLayout {
                 tile_edge: layout.tile_size,
-                slot_words: layout.entry_bytes / 4,
+                slot_words: chunks.slot_words,
                 chunk_words: (CHUNK_BYTES / 4) as u32,
                 page_chunks: chunks_per_page,
                 table_per_chunk: chunks.entries_per_chunk,
