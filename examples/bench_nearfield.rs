@@ -350,7 +350,7 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         // Interleave: trivial, each mode, trivial again — drift on a shared machine shows up as two
         // different trivial medians.
         let trivial_compute = TrivialCompute::new(&r.ctx.device, w, h);
-        let (c0, _) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
+        let (c0, c0_runs) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
         let (t0, t0_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
         let mut modes = Vec::new();
         let all = [
@@ -379,17 +379,22 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                               "lit_fraction": lit as f64 / f64::from(w * h)}));
         }
         // Ratios from interleaved rounds: each round times both trivial passes and then every mode
-        // once (after an untimed frame in the new setting), and divides; the median over rounds. A
-        // shared machine's slow and fast phases last seconds, so a round sees one phase throughout.
-        let mut ratios = vec![(Vec::new(), Vec::new()); all.len()];
+        // once (after an untimed frame in the new setting). A mode's time is its median over the
+        // rounds; a trivial pass's is the median of all its timings (the runs before the modes, one
+        // per round, the runs after). On this shared machine the trivial compute pass alone has slow
+        // phases (0.85 ms, then 1.5–2.6 ms for seconds at a time) that the modes do not show; a ratio
+        // per round divided by whatever phase that round hit, and the median of ratios moved by 2×
+        // between runs.
+        let mut per_mode = vec![Vec::new(); all.len()];
+        let (mut round_c, mut round_r) = (Vec::new(), Vec::new());
         let time = |f: &mut dyn FnMut() -> Res<()>| -> Res<f64> {
             let s = Instant::now();
             f()?;
             Ok(s.elapsed().as_secs_f64() * 1e3)
         };
         for _ in 0..a.runs {
-            let tc = time(&mut || trivial_compute.frame(&r))?;
-            let tr = time(&mut || trivial.frame(&r, &plain_view))?;
+            round_c.push(time(&mut || trivial_compute.frame(&r))?);
+            round_r.push(time(&mut || trivial.frame(&r, &plain_view))?);
             for (k, (_, mode, proxy)) in all.iter().enumerate() {
                 r.set_nearfield_settings(
                     inst,
@@ -399,22 +404,16 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                     },
                 )?;
                 r.render(&mut target, &hc, &RenderOptions::default())?;
-                let t = time(&mut || {
+                per_mode[k].push(time(&mut || {
                     r.render(&mut target, &hc, &RenderOptions::default())?;
                     Ok(())
-                })?;
-                ratios[k].0.push(t / tc);
-                ratios[k].1.push(t / tr);
+                })?);
             }
         }
         let median = |mut v: Vec<f64>| {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
-        for (m, (c, rr)) in modes.iter_mut().zip(ratios) {
-            m["ratio_compute"] = json!(median(c));
-            m["ratio_render"] = json!(median(rr));
-        }
         // The frame's fixed cost: the same render call with the luminaire's instance removed.
         r.remove_instance(inst)?;
         let (empty, _) = median_ms(
@@ -426,7 +425,14 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         )?;
         inst = r.add_instance(id, Mat4::IDENTITY)?;
         let (t1, t1_runs) = median_ms(|| trivial.frame(&r, &plain_view), a.runs)?;
-        let (c1, _) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
+        let (c1, c1_runs) = median_ms(|| trivial_compute.frame(&r), a.runs)?;
+        let trivial_c = median([c0_runs, round_c, c1_runs].concat());
+        let trivial_r = median([t0_runs.clone(), round_r, t1_runs.clone()].concat());
+        for (m, t) in modes.iter_mut().zip(per_mode) {
+            let t = median(t);
+            m["ratio_compute"] = json!(t / trivial_c);
+            m["ratio_render"] = json!(t / trivial_r);
+        }
         // Coverage: how much of the frame the luminaire's proxy fills.
         r.set_nearfield_settings(inst, NearfieldSettings::default())?;
         r.render(&mut target, &hc, &RenderOptions::default())?;

@@ -17,8 +17,9 @@
 //    gives the luminance (cd/m²), written as linear luminance or tone mapped; depth is the proxy's,
 //    or the stand-in plane through the content centre facing the eye (bounding mode).
 //
-// Tiles are read from a pool of fixed-size chunks (residency: `src/gpu/nearfield.rs`): the pack's
-// tile tables and tile slots are cut into chunks; `chunk_map` maps a pack chunk to its GPU chunk (or
+// Tiles are read from a pool of fixed-size chunks (residency: `src/gpu/residency.rs`): the pack's
+// tile tables and tile slots (each with an apron: the values right of and below the tile) are cut
+// into chunks; `chunk_map` maps a pack chunk to its GPU chunk (or
 // EMPTY when not resident). The CPU makes every chunk a frame can read resident before the frame; a
 // read of a missing chunk returns 0, and the fragment counts once in `misses` (tests assert 0).
 

@@ -919,7 +919,7 @@ impl NearfieldPass {
                 }
             }
             // Fully resident with every chunk id in use: pack chunk c sits in pool chunk c, and the
-            // shader may skip the chunk map (two of a texel's five dependent reads).
+            // shader may skip the chunk map (two of a footprint's four dependent reads).
             let identity_map = fully_resident && {
                 let r = lum.residency.lock().unwrap_or_else(|p| p.into_inner());
                 all.len() == r.map.len() && r.map.iter().enumerate().all(|(c, &g)| g as usize == c)
