@@ -4,7 +4,7 @@
 //! sphere, selects cameras around Q, and samples each selected camera j at the pixel `K_j · R_j · v`
 //! (the view ray rotated into the camera; see shaders/nearfield.wgsl). So the pixel can hold light only
 //! if, for some camera j the view can select,
-//! - v lies in D_j, the cone of directions camera j maps into the convex hull of its kept tiles
+//! - v lies in D_j, the cone of directions camera j maps into the convex hull of its lit pixels
 //!   (widened by the bilinear footprint), and
 //! - Q lies where j can be selected: within ρ_j (great-circle) of j's vertex, ρ_j being the farthest a
 //!   point selecting j can be (continuous: j's longest edge to a neighbour in a non-hole triangle, as a
@@ -41,8 +41,8 @@ pub const GROW_PX: f32 = 0.25;
 
 #[derive(Debug, Clone)]
 struct CameraCone {
-    /// Unit directions (luminaire frame) of the corners of the convex hull of the camera's kept
-    /// tiles (each widened by [`FOOTPRINT_PX`]): the edges of its cone D.
+    /// Unit directions (luminaire frame) of the corners of the convex hull of the camera's lit
+    /// pixels (each widened by [`FOOTPRINT_PX`]): the edges of its cone D.
     corners: Vec<Vec3>,
     /// Unit direction of the camera's selection vertex from the capture centre.
     vertex: DVec3,
@@ -66,8 +66,11 @@ pub struct LitDirections {
 }
 
 impl LitDirections {
-    /// The cones of every camera of a pack that has kept tiles and is a selection vertex.
-    pub fn new(set: &RayImageSet, pack: &Pack, sel: &Selection) -> Self {
+    /// The cones of every camera of a pack that has kept tiles and is a selection vertex: over the
+    /// convex hull of its lit pixels where `pixels` (which reads the tiles at the ends of every tile
+    /// row: for a pack that goes to the GPU whole, whose pages are read anyway), else of its kept
+    /// tiles (from the tile tables alone: a streamed pack's pages are read when they are needed).
+    pub fn new(set: &RayImageSet, pack: &Pack, sel: &Selection, pixels: bool) -> Self {
         let t = f64::from(pack.layout().tile_size);
         let dirs = sel.vertex_directions();
         let angle = |a: DVec3, b: DVec3| a.cross(b).length().atan2(a.dot(b));
@@ -113,23 +116,66 @@ impl LitDirections {
                     let n = (DVec2::new(px, py) - k.principal_px) / k.focal_px;
                     (c.right * n.x + c.down * n.y + c.forward).normalize().as_vec3()
                 };
-                // Per tile row, the first and last kept tile (pixels, widened by the footprint).
+                // Per pixel row, the leftmost and rightmost lit pixel (widened by the footprint),
+                // read from the kept tiles of its tile row from either end inwards until every pixel
+                // row has found its light (a row dark in the first kept tile has its light further
+                // in, where a slanted edge crosses the tile row). A tile that is not read (or cannot
+                // be) counts as lit throughout.
                 let table = pack.tile_table(i).unwrap_or(&[]);
+                let ts = t as usize;
                 let mut pts = Vec::new();
+                let mut values = vec![0f32; ts * ts];
                 for r in 0..e.bbox.h as usize {
                     let row = table
                         .get(r * e.bbox.w as usize..(r + 1) * e.bbox.w as usize)
                         .unwrap_or(&[]);
-                    let kept = |x: &u32| *x != EMPTY_TILE;
-                    let (Some(a), Some(b)) = (row.iter().position(kept), row.iter().rposition(kept)) else {
+                    let kept: Vec<usize> = (0..row.len()).filter(|&k| row[k] != EMPTY_TILE).collect();
+                    if kept.is_empty() {
                         continue;
-                    };
-                    let y0 = f64::from(e.bbox.y0 + r as u32) * t - FOOTPRINT_PX;
-                    let y1 = (f64::from(e.bbox.y0 + r as u32 + 1) * t).min(f64::from(e.height)) + FOOTPRINT_PX;
-                    let x0 = f64::from(e.bbox.x0 + a as u32) * t - FOOTPRINT_PX;
-                    let x1 = (f64::from(e.bbox.x0 + b as u32 + 1) * t).min(f64::from(e.width)) + FOOTPRINT_PX;
-                    for (x, y) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1)] {
-                        pts.push((x as f32, y as f32, ()));
+                    }
+                    let ty = e.bbox.y0 as usize + r;
+                    let rows_in_image = (e.height as usize).saturating_sub(ty * ts).min(ts);
+                    // first[y]: left edge of the leftmost lit pixel; last[y]: right edge of the rightmost.
+                    let mut first: Vec<Option<usize>> = vec![None; rows_in_image];
+                    let mut last: Vec<Option<usize>> = vec![None; rows_in_image];
+                    for (out, leftmost) in [(&mut first, true), (&mut last, false)] {
+                        let order: Box<dyn Iterator<Item = &usize>> = if leftmost {
+                            Box::new(kept.iter())
+                        } else {
+                            Box::new(kept.iter().rev())
+                        };
+                        for &k in order {
+                            if out.iter().all(Option::is_some) {
+                                break;
+                            }
+                            let x_tile = (e.bbox.x0 as usize + k) * ts;
+                            let readable = pixels && decode(pack, row[k], &mut values);
+                            for (y, o) in out.iter_mut().enumerate() {
+                                if o.is_some() {
+                                    continue;
+                                }
+                                let line = &values[y * ts..(y + 1) * ts];
+                                let lit = |v: &f32| !readable || *v > 0.0;
+                                let hit = if leftmost {
+                                    line.iter().position(lit)
+                                } else {
+                                    line.iter().rposition(lit)
+                                };
+                                *o = hit.map(|x| x_tile + x + usize::from(!leftmost));
+                            }
+                        }
+                    }
+                    for y in 0..rows_in_image {
+                        // A pixel row without light in any kept tile is dark.
+                        let (Some(l), Some(rr)) = (first[y], last[y]) else {
+                            continue;
+                        };
+                        let py = (ty * ts + y) as f64;
+                        let (y0, y1) = (py - FOOTPRINT_PX, py + 1.0 + FOOTPRINT_PX);
+                        let (x0, x1) = (l as f64 - FOOTPRINT_PX, rr as f64 + FOOTPRINT_PX);
+                        for (x, y) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1)] {
+                            pts.push((x as f32, y as f32, ()));
+                        }
                     }
                 }
                 let hull = convex_hull(pts);
@@ -708,24 +754,44 @@ fn clip_convex(subject: &[Vec2], clip: &[Vec2]) -> Vec<Vec2> {
     let orient = if twice_area(clip) >= 0.0 { 1.0 } else { -1.0 };
     let mut out = subject.to_vec();
     for i in 0..clip.len() {
-        let (a, b) = (clip[i], clip[(i + 1) % clip.len()]);
-        let side = |p: Vec2| orient * (b - a).perp_dot(p - a);
-        let input = std::mem::take(&mut out);
-        for k in 0..input.len() {
-            let (p, q) = (input[k], input[(k + 1) % input.len()]);
-            let (sp, sq) = (side(p), side(q));
-            if sp >= 0.0 {
-                out.push(p);
-            }
-            if (sp >= 0.0) != (sq >= 0.0) {
-                out.push(p + (q - p) * (sp / (sp - sq)));
-            }
-        }
+        out = clip_half(&out, clip[i], clip[(i + 1) % clip.len()], orient);
         if out.is_empty() {
             break;
         }
     }
     out
+}
+
+/// The part of convex `subject` where `orient · (b − a) ⊥· (p − a) ≥ 0` (the left of a → b for
+/// `orient` 1).
+fn clip_half(subject: &[Vec2], a: Vec2, b: Vec2, orient: f32) -> Vec<Vec2> {
+    let side = |p: Vec2| orient * (b - a).perp_dot(p - a);
+    let mut out = Vec::with_capacity(subject.len() + 1);
+    for k in 0..subject.len() {
+        let (p, q) = (subject[k], subject[(k + 1) % subject.len()]);
+        let (sp, sq) = (side(p), side(q));
+        if sp >= 0.0 {
+            out.push(p);
+        }
+        if (sp >= 0.0) != (sq >= 0.0) {
+            out.push(p + (q - p) * (sp / (sp - sq)));
+        }
+    }
+    out
+}
+
+/// Decodes the tile in slot `g` of `pack` into `out`; false where it cannot be read.
+fn decode(pack: &Pack, g: u32, out: &mut [f32]) -> bool {
+    let Some((page, off)) = pack.slot_location(g) else {
+        return false;
+    };
+    let Ok(bytes) = pack.page_bytes(page) else {
+        return false;
+    };
+    let e = pack.layout().entry_bytes as usize;
+    bytes
+        .get(off..(off + 2 * e).min(bytes.len()))
+        .is_some_and(|slot| crate::nearfield::pack::tiles::decode_tile(slot, e, out).is_ok())
 }
 
 /// Convex hull (Andrew's monotone chain) of 2D points carrying a payload, counter-clockwise, without
