@@ -276,7 +276,10 @@ fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
 
 // Luminance seen by camera `ci` at surface point p (proxy mode) or along direction v (bounding mode).
 fn camera_luminance(ci: u32, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
-    let cam = camera(ci);
+    return luminance_of(camera(ci), p, v, proxy);
+}
+
+fn luminance_of(cam: Cam, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
     // A point (w = 1) in proxy mode, a direction (w = 0) without.
     let x = select(vec4<f32>(v, 0.0), vec4<f32>(p, 1.0), proxy);
     let h = vec3<f32>(dot(cam.m0, x), dot(cam.m1, x), dot(cam.m2, x));
@@ -519,7 +522,50 @@ struct VsOut {
     // The selection triangle of the triangle raster (TRIANGLES), the camera of the cell raster
     // (CELLS), else EMPTY.
     @location(1) @interpolate(flat) tri: u32,
+    // The raster polygon's cameras (TRIANGLES: the triangle's three; CELLS: the cell's, first), as
+    // flat varyings: the vertex stage reads their records once per vertex instead of every fragment
+    // once per pixel. Projection rows, then (tile box x0 | y0 << 16, w | h << 16, table offset,
+    // width − 1 | (height − 1) << 16).
+    @location(2) @interpolate(flat) a0: vec4<f32>,
+    @location(3) @interpolate(flat) a1: vec4<f32>,
+    @location(4) @interpolate(flat) a2: vec4<f32>,
+    @location(5) @interpolate(flat) b0: vec4<f32>,
+    @location(6) @interpolate(flat) b1: vec4<f32>,
+    @location(7) @interpolate(flat) b2: vec4<f32>,
+    @location(8) @interpolate(flat) c0: vec4<f32>,
+    @location(9) @interpolate(flat) c1: vec4<f32>,
+    @location(10) @interpolate(flat) c2: vec4<f32>,
+    @location(11) @interpolate(flat) am: vec4<u32>,
+    @location(12) @interpolate(flat) bm: vec4<u32>,
+    @location(13) @interpolate(flat) cm: vec4<u32>,
 };
+
+// A camera record packed for the varyings.
+fn packed_meta(ci: u32) -> vec4<u32> {
+    let bb = cameras[6u * ci + 3u];
+    let e = cameras[6u * ci + 4u];
+    return vec4<u32>(bb.x | (bb.y << 16u), bb.z | (bb.w << 16u), e.z, (e.x - 1u) | ((e.y - 1u) << 16u));
+}
+
+fn unpacked(r0: vec4<f32>, r1: vec4<f32>, r2: vec4<f32>, m: vec4<u32>) -> Cam {
+    var cam: Cam;
+    cam.m0 = r0;
+    cam.m1 = r1;
+    cam.m2 = r2;
+    cam.bbox = vec4<u32>(m.x & 0xFFFFu, m.x >> 16u, m.y & 0xFFFFu, m.y >> 16u);
+    cam.table = m.z;
+    cam.size = vec2<u32>((m.w & 0xFFFFu) + 1u, (m.w >> 16u) + 1u);
+    return cam;
+}
+
+// Camera k (0, 1, 2) of the polygon's varyings.
+fn varying_camera(in: VsOut, k: u32) -> Cam {
+    let r0 = select(select(in.a0, in.b0, k == 1u), in.c0, k == 2u);
+    let r1 = select(select(in.a1, in.b1, k == 1u), in.c1, k == 2u);
+    let r2 = select(select(in.a2, in.b2, k == 1u), in.c2, k == 2u);
+    let m = select(select(in.am, in.bm, k == 1u), in.cm, k == 2u);
+    return unpacked(r0, r1, r2, m);
+}
 
 @vertex
 fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
@@ -530,13 +576,34 @@ fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
     return out;
 }
 
-// The frame's bounding polygons (src/gpu/lit_bound.rs): a point and its selection triangle.
+// The frame's bounding polygons (src/gpu/lit_bound.rs): a point and its selection triangle (or cell
+// camera), with the records of the cameras it draws.
 @vertex
 fn vs_polygon(@location(0) pos: vec3<f32>, @location(1) tri: u32) -> VsOut {
     var out: VsOut;
     out.clip = draw.clip_from_local * vec4<f32>(pos, 1.0);
     out.local_pos = pos;
     out.tri = tri;
+    var ca = tri;
+    var cb = tri;
+    var cc = tri;
+    if (TRIANGLES) {
+        ca = bitcast<u32>(tris[3u * tri].w);
+        cb = bitcast<u32>(tris[3u * tri + 1u].w);
+        cc = bitcast<u32>(tris[3u * tri + 2u].w);
+    }
+    out.a0 = bitcast<vec4<f32>>(cameras[6u * ca]);
+    out.a1 = bitcast<vec4<f32>>(cameras[6u * ca + 1u]);
+    out.a2 = bitcast<vec4<f32>>(cameras[6u * ca + 2u]);
+    out.am = packed_meta(ca);
+    out.b0 = bitcast<vec4<f32>>(cameras[6u * cb]);
+    out.b1 = bitcast<vec4<f32>>(cameras[6u * cb + 1u]);
+    out.b2 = bitcast<vec4<f32>>(cameras[6u * cb + 2u]);
+    out.bm = packed_meta(cb);
+    out.c0 = bitcast<vec4<f32>>(cameras[6u * cc]);
+    out.c1 = bitcast<vec4<f32>>(cameras[6u * cc + 1u]);
+    out.c2 = bitcast<vec4<f32>>(cameras[6u * cc + 2u]);
+    out.cm = packed_meta(cc);
     return out;
 }
 
@@ -629,7 +696,12 @@ fn shade(in: VsOut) -> Shaded {
     }
     for (var i = 0u; i < n_cams; i = i + 1u) {
         if (sel.cam[i] != EMPTY && sel.w[i] > 0.0 && !blocked[i]) {
-            let li = camera_luminance(sel.cam[i], p, v, proxy);
+            var li: f32;
+            if (TRIANGLES || CELLS) {
+                li = luminance_of(varying_camera(in, i), p, v, proxy);
+            } else {
+                li = camera_luminance(sel.cam[i], p, v, proxy);
+            }
             l = l + sel.w[i] * li;
             wsum = wsum + sel.w[i];
             if (li > 0.0) {

@@ -599,7 +599,12 @@ impl NearfieldPass {
                 count: None,
             }];
             for b in 1..=5 {
-                entries.push(storage_entry(b, true));
+                let mut e = storage_entry(b, true);
+                // The polygon vertex stage reads the camera records and triangles (flat varyings).
+                if b <= 2 {
+                    e.visibility = wgpu::ShaderStages::VERTEX_FRAGMENT;
+                }
+                entries.push(e);
             }
             entries.push(storage_entry(6, false));
             for b in 0..MAX_POOL_PAGES as u32 {
@@ -936,6 +941,25 @@ impl NearfieldPass {
         if let Some(p) = self.pipelines.get(&key) {
             return Ok(p.clone());
         }
+        let constants = [
+            ("POOL_PAGES", f64::from(key.pool_pages)),
+            ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
+            ("SELECTION", f64::from(key.selection)),
+            ("PROXY", f64::from(u8::from(key.proxy))),
+            ("VISIBILITY", f64::from(u8::from(key.visibility))),
+            (
+                "TRIANGLES",
+                f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
+            ),
+            ("CELLS", f64::from(u8::from(key.polygon == Some(PolygonKind::Cells)))),
+            ("BOX", f64::from(u8::from(key.is_box()))),
+            ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
+            ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
+            ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
+            ("PAGE_CHUNKS", f64::from(key.pool_layout.page_chunks)),
+            ("TABLE_PER_CHUNK", f64::from(key.pool_layout.table_per_chunk)),
+            ("SLOTS_PER_CHUNK", f64::from(key.pool_layout.slots_per_chunk)),
+        ];
         let p = ctx.scoped("creating a near-field pipeline", || {
             let targets = &frame_color_targets(key.color, key.depth_copy);
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
@@ -944,7 +968,11 @@ impl NearfieldPass {
                 vertex: wgpu::VertexState {
                     module: &self.module,
                     entry_point: Some(if key.polygon.is_some() { "vs_polygon" } else { "vs_main" }),
-                    compilation_options: Default::default(),
+                    // The same constants for both stages (the polygon vertex stage reads TRIANGLES).
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &constants,
+                        ..Default::default()
+                    },
                     buffers: &[Some(if key.polygon.is_some() {
                         POLYGON_LAYOUT
                     } else {
@@ -967,25 +995,7 @@ impl NearfieldPass {
                         (false, true) => "fs_box_color_only",
                     }),
                     compilation_options: wgpu::PipelineCompilationOptions {
-                        constants: &[
-                            ("POOL_PAGES", f64::from(key.pool_pages)),
-                            ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
-                            ("SELECTION", f64::from(key.selection)),
-                            ("PROXY", f64::from(u8::from(key.proxy))),
-                            ("VISIBILITY", f64::from(u8::from(key.visibility))),
-                            (
-                                "TRIANGLES",
-                                f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
-                            ),
-                            ("CELLS", f64::from(u8::from(key.polygon == Some(PolygonKind::Cells)))),
-                            ("BOX", f64::from(u8::from(key.is_box()))),
-                            ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
-                            ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
-                            ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
-                            ("PAGE_CHUNKS", f64::from(key.pool_layout.page_chunks)),
-                            ("TABLE_PER_CHUNK", f64::from(key.pool_layout.table_per_chunk)),
-                            ("SLOTS_PER_CHUNK", f64::from(key.pool_layout.slots_per_chunk)),
-                        ],
+                        constants: &constants,
                         ..Default::default()
                     },
                     targets,
