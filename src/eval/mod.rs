@@ -113,6 +113,13 @@ pub struct EvalConfig {
     pub work_dir: PathBuf,
     /// Where the worst views are written as images (render | reference | error), if anywhere.
     pub images_dir: Option<PathBuf>,
+    /// Samples per capture pixel along each axis: 1 point-samples the captures (the contract), N
+    /// averages N × N samples over each pixel, as a sensor integrates (for docs/nearfield-rendering.md
+    /// "Known limits"; not held to the thresholds).
+    pub capture_samples: u32,
+    /// View pixels across the smallest feature (6 in the contract): views are at most the smallest
+    /// feature / this apart.
+    pub feature_view_px: f64,
 }
 
 impl Default for EvalConfig {
@@ -134,6 +141,8 @@ impl Default for EvalConfig {
             modes: EvalMode::ALL.to_vec(),
             work_dir: std::env::temp_dir().join("lumiview-eval"),
             images_dir: None,
+            capture_samples: 1,
+            feature_view_px: 6.0,
         }
     }
 }
@@ -336,6 +345,18 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
             cfg.max_capture_px
         ));
     }
+    if cfg.capture_samples > 1 {
+        notes.push(format!(
+            "captures average {0} × {0} samples per pixel (the contract point-samples them)",
+            cfg.capture_samples
+        ));
+    }
+    if cfg.feature_view_px != 6.0 && smallest_feature_m(name).is_some() {
+        notes.push(format!(
+            "views resolve the smallest feature with {} px (the contract: 6)",
+            cfg.feature_view_px
+        ));
+    }
     let per_hemisphere = cameras_per_hemisphere(name, cfg.per_hemisphere);
     if per_hemisphere != cfg.per_hemisphere {
         notes.push(format!(
@@ -357,7 +378,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
     let (_, set) = synth::synth_set(&opts)?;
     let pitch_m = cfg.radius_m / set.intrinsics.focal_px.x;
     // Views resolve the smallest feature with 6 pixels even where the capture cap does not.
-    let view_pitch_m = smallest_feature_m(name).map_or(pitch_m, |f| pitch_m.min(f / 6.0));
+    let view_pitch_m = smallest_feature_m(name).map_or(pitch_m, |f| pitch_m.min(f / cfg.feature_view_px));
     // Hold out every tenth camera.
     let mut kept = Vec::new();
     let mut held_out = Vec::new();
@@ -374,9 +395,14 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
         cameras: kept,
     };
     std::fs::create_dir_all(&cfg.work_dir).map_err(|e| crate::nearfield::NearfieldError::io(&cfg.work_dir, e))?;
-    let path = cfg
-        .work_dir
-        .join(format!("{name}-rigo{per_hemisphere}-{capture_px}px.lvpack"));
+    let path = cfg.work_dir.join(if cfg.capture_samples > 1 {
+        format!(
+            "{name}-rigo{per_hemisphere}-{capture_px}px-{}x{0}.lvpack",
+            cfg.capture_samples
+        )
+    } else {
+        format!("{name}-rigo{per_hemisphere}-{capture_px}px.lvpack")
+    });
     let reuse = Pack::open(&path)
         .ok()
         .filter(|p| p.image_count() == kept_set.cameras.len() && p.rayset().cameras == kept_set.cameras);
@@ -388,7 +414,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
                 kept_set.cameras.len(),
                 pitch_m * 1e3
             ));
-            let source = SynthSource::new(lum.clone(), kept_set.clone(), 1)?;
+            let source = SynthSource::new(lum.clone(), kept_set.clone(), cfg.capture_samples.max(1))?;
             let scan = Scan {
                 set: kept_set,
                 source: Box::new(source),

@@ -38,6 +38,16 @@ pub struct EvalArgs {
     /// Camera spacings the continuity sweep covers (0.05° steps).
     #[arg(long, default_value_t = 3.0)]
     pub sweep_spacings: f64,
+    /// Side of the orthographic views for intensity and flux, in pixels (they frame the bounding sphere).
+    #[arg(long, default_value_t = 512)]
+    pub ortho_px: u32,
+    /// Samples per capture pixel along each axis: 1 point-samples (the quality contract), N averages
+    /// N × N over each pixel as a sensor does (docs/nearfield-rendering.md, "Known limits").
+    #[arg(long, default_value_t = 1)]
+    pub capture_samples: u32,
+    /// View pixels across a luminaire's smallest feature (the contract: 6).
+    #[arg(long, default_value_t = 6.0)]
+    pub feature_px: f64,
     /// Where synthetic scans are packed and cached (reused when the cameras match).
     #[arg(long, default_value = "target/eval")]
     pub work_dir: PathBuf,
@@ -79,8 +89,20 @@ pub fn eval(a: &EvalArgs) -> CliResult {
     if !(a.sweep_spacings.is_finite() && a.sweep_spacings > 0.0) {
         return Err(format!("--sweep-spacings {}: expected a positive number", a.sweep_spacings).into());
     }
+    if !(64..=4096).contains(&a.ortho_px) {
+        return Err(format!("--ortho-px {}: expected 64…4096", a.ortho_px).into());
+    }
+    if !(1..=8).contains(&a.capture_samples) {
+        return Err(format!("--capture-samples {}: expected 1…8", a.capture_samples).into());
+    }
+    if !(a.feature_px.is_finite() && (1.0..=64.0).contains(&a.feature_px)) {
+        return Err(format!("--feature-px {}: expected 1…64", a.feature_px).into());
+    }
     let cfg = EvalConfig {
         per_hemisphere: a.cameras,
+        ortho_px: a.ortho_px,
+        capture_samples: a.capture_samples,
+        feature_view_px: a.feature_px,
         max_capture_px: a.max_capture_px.max(32),
         max_view_px: a.max_view_px.max(16),
         sweep_spacings: a.sweep_spacings,
