@@ -513,9 +513,26 @@ fn evaluate_loaded(
     let held: Vec<View> = (0..n_held)
         .map(|i| {
             let (c, k) = &p.held_out[i * p.held_out.len() / n_held.max(1)];
+            // From the removed camera's pose at the views' pitch where that is finer than the
+            // captures' (a feature the captures resolve with few pixels has no interior at their
+            // pitch), cropped about the principal point like the other views.
+            let s = (p.pitch_m / p.view_pitch_m).max(1.0);
+            let side = |n: u32| ((f64::from(n) * s).ceil() as u32).clamp(8, cfg.max_view_px.max(8));
+            let (w, h) = if s > 1.0 {
+                (side(k.width), side(k.height))
+            } else {
+                (k.width, k.height)
+            };
+            let shift = DVec2::new(f64::from(k.width), f64::from(k.height)) * s * 0.5
+                - DVec2::new(f64::from(w), f64::from(h)) * 0.5;
             View {
                 camera: c.clone(),
-                intrinsics: *k,
+                intrinsics: Intrinsics {
+                    width: w,
+                    height: h,
+                    principal_px: k.principal_px * s - shift,
+                    focal_px: k.focal_px * s,
+                },
             }
         })
         // Held-out cameras that see nothing (the dark hemisphere) measure nothing.
