@@ -149,7 +149,7 @@ impl LitDirections {
                                 break;
                             }
                             let x_tile = (e.bbox.x0 as usize + k) * ts;
-                            let readable = pixels && decode(pack, row[k], &mut values);
+                            let readable = pixels && pack.decode_slot(row[k], &mut values).is_ok();
                             for (y, o) in out.iter_mut().enumerate() {
                                 if o.is_some() {
                                     continue;
@@ -778,20 +778,6 @@ fn clip_half(subject: &[Vec2], a: Vec2, b: Vec2, orient: f32) -> Vec<Vec2> {
         }
     }
     out
-}
-
-/// Decodes the tile in slot `g` of `pack` into `out`; false where it cannot be read.
-fn decode(pack: &Pack, g: u32, out: &mut [f32]) -> bool {
-    let Some((page, off)) = pack.slot_location(g) else {
-        return false;
-    };
-    let Ok(bytes) = pack.page_bytes(page) else {
-        return false;
-    };
-    let e = pack.layout().entry_bytes as usize;
-    bytes
-        .get(off..(off + 2 * e).min(bytes.len()))
-        .is_some_and(|slot| crate::nearfield::pack::tiles::decode_tile(slot, e, out).is_ok())
 }
 
 /// Convex hull (Andrew's monotone chain) of 2D points carrying a payload, counter-clockwise, without

@@ -239,24 +239,17 @@ impl ChunkLayout {
             }
             let at = (g - first) as usize * sw;
             let apron_at = if g < self.pack_slots {
-                let (page, off) = pack
-                    .slot_location(g as u32)
-                    .ok_or_else(|| pack_error(pack, format!("slot {g} is beyond the pool")))?;
-                let bytes = pack.page_bytes(page)?;
-                let slot = bytes
-                    .get(off..(off + 2 * e).min(bytes.len()))
-                    .ok_or_else(|| pack_error(pack, format!("slot {g} lies beyond its page")))?;
-                let mode = crate::nearfield::pack::tiles::decode_tile(slot, e, &mut tile)
-                    .map_err(|m| pack_error(pack, format!("slot {g}: {m}")))?;
                 // The pack's words as they are (header, then fp16 pairs or f32 values).
+                let mode = pack.decode_slot(g as u32, &mut tile)?;
                 let n = match mode {
                     crate::nearfield::pack::tiles::TileMode::F16Scaled => e / 4,
                     crate::nearfield::pack::tiles::TileMode::F32 => 1 + values,
                 };
-                let dst = &mut words[at..];
-                for (j, w) in dst.iter_mut().take(n.min(slot.len() / 4)).enumerate() {
-                    *w = u32::from_le_bytes([slot[4 * j], slot[4 * j + 1], slot[4 * j + 2], slot[4 * j + 3]]);
-                }
+                pack.with_slot(g as u32, |slot| {
+                    for (j, w) in words[at..].iter_mut().take(n.min(slot.len() / 4)).enumerate() {
+                        *w = u32::from_le_bytes([slot[4 * j], slot[4 * j + 1], slot[4 * j + 2], slot[4 * j + 3]]);
+                    }
+                })?;
                 at + n
             } else {
                 // An apron-only slot: an fp16 tile of zeros with scale 1.
@@ -274,29 +267,47 @@ impl ChunkLayout {
     }
 
     /// The apron of tile `k` (index in its camera's table) of camera `cam`: the 2T + 1 stored values
-    /// right of it (rows 0…T) and below it (columns 0…T − 1); 0 beyond the image or where no tile is
-    /// kept.
+    /// right of it (rows 0…T) and below it (columns 0…T − 1), read from the three neighbouring tiles;
+    /// 0 beyond the image or where no tile is kept.
     fn apron(&self, pack: &Pack, cam: usize, k: usize) -> crate::nearfield::error::Result<Vec<f32>> {
         let e = &pack.images()[cam];
-        let t = self.tile;
-        let w = e.bbox.w.max(1) as usize;
-        let (x0, y0) = ((e.bbox.x0 + (k % w) as u32) * t, (e.bbox.y0 + (k / w) as u32) * t);
-        let mut out = Vec::with_capacity(2 * t as usize + 1);
-        for a in 0..2 * t + 1 {
-            let (x, y) = if a <= t { (t, a) } else { (a - t - 1, t) };
-            let (col, row) = (x0 + x, y0 + y);
-            out.push(if col < e.width && row < e.height {
-                pack.sample(cam, col, row)?
+        let t = self.tile as usize;
+        let (w, h) = (e.bbox.w as usize, e.bbox.h as usize);
+        let (bx, by) = (k % w.max(1), k / w.max(1));
+        let table = pack.tile_table(cam).unwrap_or(&[]);
+        let mut tile = vec![0f32; t * t];
+        let mut out = vec![0f32; 2 * t + 1];
+        // (neighbour dx, dy) → which of its values land where in the apron.
+        for (dx, dy) in [(1, 0), (1, 1), (0, 1)] {
+            let (x, y) = (bx + dx, by + dy);
+            let g = if x < w && y < h {
+                table.get(y * w + x).copied()
             } else {
-                0.0
-            });
+                None
+            };
+            let Some(g) = g.filter(|&g| g != EMPTY_TILE) else {
+                continue;
+            };
+            pack.decode_slot(g, &mut tile)?;
+            match (dx, dy) {
+                // Its first column: the column right of the tile, rows 0…T − 1.
+                (1, 0) => (0..t).for_each(|r| out[r] = tile[r * t]),
+                // Its first value: the corner (T, T).
+                (1, 1) => out[t] = tile[0],
+                // Its first row: the row below the tile.
+                _ => (0..t).for_each(|c| out[t + 1 + c] = tile[c]),
+            }
+        }
+        // Beyond the image there is nothing (a ragged tile's padding included).
+        let (x0, y0) = ((e.bbox.x0 as usize + bx) * t, (e.bbox.y0 as usize + by) * t);
+        for (a, v) in out.iter_mut().enumerate() {
+            let (x, y) = if a <= t { (t, a) } else { (a - t - 1, t) };
+            if x0 + x >= e.width as usize || y0 + y >= e.height as usize {
+                *v = 0.0;
+            }
         }
         Ok(out)
     }
-}
-
-fn pack_error(pack: &Pack, message: String) -> crate::nearfield::NearfieldError {
-    crate::nearfield::NearfieldError::invalid(pack.path().display().to_string(), message)
 }
 
 /// Which chunk sits in which GPU chunk, and when each was last used.

@@ -685,6 +685,30 @@ impl Pack {
             .ok_or_else(|| self.corrupt(&page_name(p), format!("slot {g} lies beyond the page's end")))
     }
 
+    /// Calls `f` with the bytes of global slot `g` (from its start to at most two slots on, or the
+    /// end of its page: an f32 tile takes two). Reads (and verifies) the slot's page on first use.
+    ///
+    /// Errors: a slot beyond the pool or its page, I/O, or a corrupt page.
+    pub fn with_slot<R>(&self, g: u32, f: impl FnOnce(&[u8]) -> R) -> Result<R> {
+        let (p, _) = self
+            .slot_location(g)
+            .ok_or_else(|| self.corrupt(format::TILE_TABLES, format!("slot {g} is beyond the pool")))?;
+        let page = self.page_bytes(p)?;
+        Ok(f(self.slot(&page, g)?))
+    }
+
+    /// Decodes the tile at global slot `g` into `out` (`tile_size²` luminances, cd/m², row-major)
+    /// and says how it is stored.
+    ///
+    /// Errors: as [`Pack::with_slot`], or a malformed tile.
+    pub fn decode_slot(&self, g: u32, out: &mut [f32]) -> Result<tiles::TileMode> {
+        let e = self.layout.entry_bytes as usize;
+        self.with_slot(g, |slot| decode_tile(slot, e, out))?.map_err(|m| {
+            let p = self.slot_location(g).map_or(0, |(p, _)| p);
+            self.corrupt(&page_name(p), format!("slot {g}: {m}"))
+        })
+    }
+
     /// The stored luminance (cd/m²) of pixel (`col`, `row`) of image `image`; 0 where no tile is
     /// stored. Reads (and verifies) the tile's page on first use.
     ///
