@@ -85,9 +85,16 @@ fn check(rep: &LuminaireReport) {
 
 /// Evaluates `names` with captures of at most `max_capture_px` (the pitch rule decides below it).
 fn run(names: &[&str], tag: &str, max_capture_px: u32) {
+    for rep in evaluate_all(names, tag, max_capture_px) {
+        check(&rep);
+    }
+}
+
+/// The reports of `names` (empty where no GPU test runs), after printing their table.
+fn evaluate_all(names: &[&str], tag: &str, max_capture_px: u32) -> Vec<LuminaireReport> {
     let _g = gpu_common::GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let Some(mut r) = gpu_common::renderer() else {
-        return;
+        return Vec::new();
     };
     let cfg = config(tag, max_capture_px);
     let mut reports = Vec::new();
@@ -96,10 +103,8 @@ fn run(names: &[&str], tag: &str, max_capture_px: u32) {
     }
     let _ = std::fs::remove_dir_all(&cfg.work_dir);
     eprintln!("{}", format_table(&reports));
-    for rep in &reports {
-        check(rep);
-    }
     gpu_common::assert_no_validation_messages();
+    reports
 }
 
 #[test]
@@ -123,4 +128,43 @@ fn lambertian_cosine_disc_meets_the_contract() {
 fn star_panel_meets_the_contract() {
     // The star's 10 mm sectors ask for 1.67 mm pixels: 343 px captures.
     run(&["star-panel"], "star", 352);
+}
+
+#[test]
+fn cos10_meets_the_thresholds() {
+    // A cos¹⁰ lobe (2,969 cameras per hemisphere: 1/8 of its half-power half-width apart) holds the
+    // issue's thresholds with the log blend, which a linear blend or a blend that turns linear too
+    // early does not (log RMSE 0.031 and 0.017: docs/nearfield-rendering.md, "Known limits"). Not
+    // the whole contract: from inside the sphere `nearest` has the lower median (its billboard
+    // samples exactly the eye's direction, and this luminance depends on the direction only), and a
+    // third of the inside views change by more than 25 % within 5 × 5 pixels (unmeasured).
+    for rep in evaluate_all(&["cos10"], "cos10", 128) {
+        let c = mode(&rep, "continuous+proxy");
+        let n = mode(&rep, "nearest");
+        for (set, what, need) in [
+            (&c.outside, "outside", 6),
+            (&c.inside, "inside", 4),
+            (&c.held_out, "held-out", 2),
+        ] {
+            assert!(set.views >= need, "cos10 {what}: {} views measured", set.views);
+            let l = set.log_rmse.unwrap();
+            assert!(l < 0.01, "cos10 {what}: log RMSE {l}");
+            let m = set.median_rel.unwrap();
+            assert!(m < 0.02, "cos10 {what}: median {m}");
+        }
+        assert!(c.flux_error < 0.01, "cos10: flux error {}", c.flux_error);
+        assert!(c.jump < 0.02, "cos10: jump {}", c.jump);
+        for (a, b, what) in [
+            (c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE"),
+            (c.outside.median_rel, n.outside.median_rel, "outside median"),
+            (c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE"),
+            (Some(c.flux_error), Some(n.flux_error), "flux"),
+            (Some(c.intensity_max), Some(n.intensity_max), "intensity max"),
+            (Some(c.jump), Some(n.jump), "jump"),
+        ] {
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!(a <= b, "cos10: {what}: continuous+proxy {a} vs nearest {b}");
+            }
+        }
+    }
 }
