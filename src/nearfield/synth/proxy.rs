@@ -58,14 +58,19 @@ impl ProxyMesh {
         });
     }
 
-    /// Adds a disc (an inscribed polygon of `segments` ≥ 3 sides) centred at `centre` in the plane
-    /// z = centre.z, facing down (−Z).
+    /// Adds a disc centred at `centre` in the plane z = centre.z, facing down (−Z): a regular polygon
+    /// of `segments` ≥ 3 sides with the disc's area (its vertices a little outside the circle, its
+    /// edges' midpoints a little inside). An inscribed polygon would lose area, and with it light: the
+    /// renderer draws only where the proxy is, so a 32-gon's 0.64 % shortfall is a 0.64 % flux error.
     pub fn add_disc(&mut self, name: &str, centre: DVec3, radius: f64, segments: u32) {
         let n = segments.max(3);
+        let step = std::f64::consts::TAU / f64::from(n);
+        // Polygon area n/2·R²·sin(2π/n) = π r².
+        let r_vertex = radius * (std::f64::consts::TAU / (f64::from(n) * step.sin())).sqrt();
         let mut positions = vec![centre];
         for k in 0..n {
-            let a = std::f64::consts::TAU * f64::from(k) / f64::from(n);
-            positions.push(centre + DVec3::new(radius * a.cos(), radius * a.sin(), 0.0));
+            let a = step * f64::from(k);
+            positions.push(centre + DVec3::new(r_vertex * a.cos(), r_vertex * a.sin(), 0.0));
         }
         let mut indices = Vec::with_capacity(3 * n as usize);
         for k in 0..n {
@@ -208,6 +213,25 @@ impl ProxyMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_disc_polygon_has_the_disc_area() {
+        for n in [3u32, 8, 32, 128] {
+            let mut m = ProxyMesh::new("t");
+            m.add_disc("d", DVec3::new(0.3, -0.2, 0.0), 0.0015, n);
+            let s = &m.surfaces[0];
+            let area: f64 = s
+                .indices
+                .chunks(3)
+                .map(|t| {
+                    let p = |k: usize| s.positions[t[k] as usize];
+                    0.5 * (p(1) - p(0)).cross(p(2) - p(0)).length()
+                })
+                .sum();
+            let disc = std::f64::consts::PI * 0.0015 * 0.0015;
+            assert!((area / disc - 1.0).abs() < 1e-12, "{n} segments: {area} vs {disc}");
+        }
+    }
 
     #[test]
     fn rect_and_disc_face_down() {
