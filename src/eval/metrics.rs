@@ -41,7 +41,24 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Compares a render with its reference (both `w × h`, cd/m²). Non-finite render values count as 0.
+/// Interior pixels are at least 2 px from a silhouette or step ([`compare_view_with_margin`]).
 pub fn compare_view(render: &[f32], reference: &[f32], w: usize, h: usize) -> ViewMetrics {
+    compare_view_with_margin(render, reference, w, h, 2)
+}
+
+/// [`compare_view`] with interior pixels also at least `margin_px` (≥ 2) from a step inside the
+/// luminaire: a reference pixel with light whose 4-neighbour has light too (however little: a dim
+/// background is still the surface) and differs from it by more than [`INTERIOR_RATIO`]. A view finer than the captures by a factor s takes 2·s (change 7 of
+/// docs/quality-metrics.md): such a step is where the captures' pixels put it, known to within one of
+/// them. Silhouettes (light next to none) keep the 2 px of the 5 × 5 test: the proxy places them at
+/// the view's own pixels (the silhouette metric measures how well).
+pub fn compare_view_with_margin(
+    render: &[f32],
+    reference: &[f32],
+    w: usize,
+    h: usize,
+    margin_px: usize,
+) -> ViewMetrics {
     let n = w * h;
     if render.len() < n || reference.len() < n || n == 0 {
         return ViewMetrics::default();
@@ -62,6 +79,32 @@ pub fn compare_view(render: &[f32], reference: &[f32], w: usize, h: usize) -> Vi
     };
     let lit_t: Vec<bool> = reference[..n].iter().map(|v| *v > thr).collect();
     let lit_r: Vec<bool> = (0..n).map(|i| r(i) > f64::from(thr)).collect();
+    // Steps, counted in a summed-area table (row-major, (w + 1) × (h + 1)) for the margin test.
+    let step = |i: usize, j: usize| -> bool {
+        let (a, b) = (reference[i], reference[j]);
+        b > 0.0 && a.max(b) > INTERIOR_RATIO * a.min(b)
+    };
+    let mut sat = vec![0u32; (w + 1) * (h + 1)];
+    for y in 0..h {
+        let mut row = 0u32;
+        for x in 0..w {
+            let i = y * w + x;
+            let s = reference[i] > 0.0
+                && ((x > 0 && step(i, i - 1))
+                    || (x + 1 < w && step(i, i + 1))
+                    || (y > 0 && step(i, i - w))
+                    || (y + 1 < h && step(i, i + w)));
+            row += u32::from(s);
+            sat[(y + 1) * (w + 1) + x + 1] = sat[y * (w + 1) + x + 1] + row;
+        }
+    }
+    let m = margin_px.max(2);
+    let steps_near = |x: usize, y: usize| -> bool {
+        let (x0, y0) = (x.saturating_sub(m), y.saturating_sub(m));
+        let (x1, y1) = ((x + m + 1).min(w), (y + m + 1).min(h));
+        let at = |xx: usize, yy: usize| sat[yy * (w + 1) + xx];
+        at(x1, y1) + at(x0, y0) > at(x0, y1) + at(x1, y0)
+    };
     let mut rel = Vec::new();
     let mut log2 = 0.0;
     let mut all_log2 = 0.0;
@@ -87,7 +130,7 @@ pub fn compare_view(render: &[f32], reference: &[f32], w: usize, h: usize) -> Vi
                     hi = hi.max(v);
                 }
             }
-            if lo <= thr || hi > INTERIOR_RATIO * lo {
+            if lo <= thr || hi > INTERIOR_RATIO * lo || (m > 2 && steps_near(x, y)) {
                 continue;
             }
             rel.push((r(i) - t).abs() / t);
@@ -253,6 +296,37 @@ mod tests {
         let r = disc(128, 128, 69.0, 30.0, 10.0);
         let m = compare_view(&r, &t, 128, 128);
         assert!(m.doubled.unwrap() > 0.0);
+    }
+
+    #[test]
+    fn a_wider_margin_keeps_pixels_further_from_steps() {
+        // A bright disc (r = 20 px) on a dim lit background: a step inside the lit region.
+        let mut t = disc(96, 96, 48.0, 20.0, 1000.0);
+        for v in &mut t {
+            *v = v.max(100.0);
+        }
+        let near = compare_view(&t, &t, 96, 96);
+        let far = compare_view_with_margin(&t, &t, 96, 96, 6);
+        assert!(far.interior < near.interior && far.interior > 0);
+        // A render blurred across the step by 3 px: the 2 px margin sees the blur, 6 px does not.
+        let mut r = t.clone();
+        for y in 0..96 {
+            for x in 0..96 {
+                let d = ((x as f64 + 0.5 - 48.0).powi(2) + (y as f64 + 0.5 - 48.0).powi(2)).sqrt();
+                if (d - 20.0).abs() < 3.0 {
+                    r[y * 96 + x] = 550.0;
+                }
+            }
+        }
+        assert!(compare_view(&r, &t, 96, 96).doubled.unwrap() > 0.0);
+        let m = compare_view_with_margin(&r, &t, 96, 96, 6);
+        assert_eq!((m.doubled, m.log_rmse), (Some(0.0), Some(0.0)));
+        // A silhouette (the background dark) keeps the 2 px margin: as many interior pixels as before.
+        let d = disc(96, 96, 48.0, 20.0, 1000.0);
+        assert_eq!(
+            compare_view_with_margin(&d, &d, 96, 96, 6).interior,
+            compare_view(&d, &d, 96, 96).interior
+        );
     }
 
     #[test]

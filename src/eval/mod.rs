@@ -22,7 +22,7 @@ use crate::nearfield::select::SelectionMode;
 use crate::nearfield::synth::{self, render_ortho, render_pinhole, Luminaire, OrthoView, SynthOptions, SynthSource};
 use crate::nearfield::{Camera, Hemisphere, Intrinsics, RayImageSet, Scan};
 
-pub use metrics::{aggregate, compare_view, SetMetrics, ViewMetrics};
+pub use metrics::{aggregate, compare_view, compare_view_with_margin, SetMetrics, ViewMetrics};
 
 /// A rendering mode the harness compares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -117,9 +117,9 @@ pub struct EvalConfig {
     /// averages N × N samples over each pixel, as a sensor integrates (for docs/nearfield-rendering.md
     /// "Known limits"; not held to the thresholds).
     pub capture_samples: u32,
-    /// View pixels across the smallest feature (6 in the contract): views are at most the smallest
-    /// feature / this apart.
-    pub feature_view_px: f64,
+    /// View pixels across the smallest feature; `None`: the contract's [`feature_px`] (views are at
+    /// most the smallest feature / this apart).
+    pub feature_view_px: Option<f64>,
 }
 
 impl Default for EvalConfig {
@@ -134,7 +134,7 @@ impl Default for EvalConfig {
             directions_deg: vec![(0.0, 10.0), (30.0, 100.0), (55.0, 200.0), (75.0, 300.0)],
             held_out_views: 12,
             flux_directions: 96,
-            ortho_px: 512,
+            ortho_px: 1024,
             sweep_spacings: 3.0,
             sweep_step_deg: 0.05,
             max_sweep_px: 128,
@@ -142,7 +142,7 @@ impl Default for EvalConfig {
             work_dir: std::env::temp_dir().join("lumiview-eval"),
             images_dir: None,
             capture_samples: 1,
-            feature_view_px: 6.0,
+            feature_view_px: None,
         }
     }
 }
@@ -158,6 +158,18 @@ pub fn smallest_feature_m(name: &str) -> Option<f64> {
         "star-panel" => Some(0.010),
         "reflector" => Some(0.006),
         _ => None,
+    }
+}
+
+/// Pixels across a luminaire's smallest feature that its captures and views need (the contract's
+/// pitch rule, change 7): 20 for a compact feature (a dot, a spot: a disc d pixels across has about
+/// π(d/2 − 2√2)² interior pixels, 50 of them need d ≥ 13.6, and seen at γ 55° with a margin of
+/// 2 capture pixels from a step (peak) it needs d ≈ 20), 6 for an elongated one (a strip, a gap, a
+/// spoke: its interior is a band along it).
+pub fn feature_px(name: &str) -> f64 {
+    match name {
+        "led-dots" | "peak" => 20.0,
+        _ => 6.0,
     }
 }
 
@@ -238,6 +250,9 @@ pub struct View {
     pub camera: Camera,
     /// Intrinsics.
     pub intrinsics: Intrinsics,
+    /// How far (px) interior pixels keep from silhouettes and steps: 2, or 2·s where the view is s
+    /// times finer than the captures ([`compare_view_with_margin`]).
+    pub margin_px: usize,
 }
 
 fn direction(gamma_deg: f64, c_deg: f64) -> DVec3 {
@@ -271,6 +286,7 @@ pub fn framed_view(eye: DVec3, target: DVec3, rb: f64, pitch_m: f64, max_px: u32
             principal_px: DVec2::splat(0.5 * f64::from(size)),
             focal_px: DVec2::splat(f),
         },
+        margin_px: 2,
     }
 }
 
@@ -316,6 +332,32 @@ pub enum EvalError {
     Nearfield(#[from] crate::nearfield::NearfieldError),
 }
 
+impl Prepared {
+    /// The pitch (m, at the feature) of a view along the unit direction `forward`: the captures', or
+    /// finer where the smallest feature as the view sees it, foreshortened by the cosine between the
+    /// view and the luminaire's axis (its features lie in planes z = const), would get fewer pixels
+    /// than its rule asks (changes 2 and 7 of docs/quality-metrics.md).
+    fn view_pitch(&self, forward: DVec3) -> f64 {
+        self.feature.map_or(self.pitch_m, |(f, px)| {
+            self.pitch_m.min(f * forward.z.abs().max(0.05) / px)
+        })
+    }
+
+    /// A view along `forward` at [`Prepared::view_pitch`], from `eye` looking at `target`, with its
+    /// interior margin.
+    fn view(&self, eye: DVec3, target: DVec3, max_px: u32) -> View {
+        let pitch = self.view_pitch((target - eye).normalize_or_zero());
+        let mut v = framed_view(eye, target, self.rb, pitch, max_px);
+        v.margin_px = margin_px(self.pitch_m / pitch);
+        v
+    }
+}
+
+/// The interior margin (px) of a view `s` times finer than the captures: 2 capture pixels, rounded.
+fn margin_px(s: f64) -> usize {
+    ((2.0 * s.max(1.0)).round() as usize).max(2)
+}
+
 /// The scan of one luminaire: pack, held-out cameras, pitch.
 struct Prepared {
     lum: Arc<dyn Luminaire>,
@@ -323,6 +365,8 @@ struct Prepared {
     held_out: Vec<(Camera, Intrinsics)>,
     pitch_m: f64,
     view_pitch_m: f64,
+    /// The smallest feature (m) and the view pixels across it, where the luminaire has one.
+    feature: Option<(f64, f64)>,
     capture_px: u32,
     per_hemisphere: usize,
     rb: f64,
@@ -334,7 +378,8 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
     let b = lum.bounds();
     let rb = b.centre().length() + b.radius();
     let mut notes = Vec::new();
-    let wanted = smallest_feature_m(name).map_or(0.002, |f| (f / 6.0).min(0.002));
+    let wanted = smallest_feature_m(name).map_or(0.002, |f| (f / feature_px(name)).min(0.002));
+    let view_px = cfg.feature_view_px.unwrap_or(feature_px(name));
     // Image side that frames the bounding sphere at 80 % fill with this pitch at the centre.
     let alpha = (rb / cfg.radius_m).asin();
     let need_px = (2.0 * cfg.radius_m * alpha.tan() / (synth::scan::DEFAULT_FILL * wanted)).ceil() as u32;
@@ -351,10 +396,10 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
             cfg.capture_samples
         ));
     }
-    if cfg.feature_view_px != 6.0 && smallest_feature_m(name).is_some() {
+    if view_px != feature_px(name) && smallest_feature_m(name).is_some() {
         notes.push(format!(
-            "views resolve the smallest feature with {} px (the contract: 6)",
-            cfg.feature_view_px
+            "views resolve the smallest feature with {view_px} px (the contract: {})",
+            feature_px(name)
         ));
     }
     let per_hemisphere = cameras_per_hemisphere(name, cfg.per_hemisphere);
@@ -378,7 +423,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
     let (_, set) = synth::synth_set(&opts)?;
     let pitch_m = cfg.radius_m / set.intrinsics.focal_px.x;
     // Views resolve the smallest feature with 6 pixels even where the capture cap does not.
-    let view_pitch_m = smallest_feature_m(name).map_or(pitch_m, |f| pitch_m.min(f / cfg.feature_view_px));
+    let view_pitch_m = smallest_feature_m(name).map_or(pitch_m, |f| pitch_m.min(f / view_px));
     // Hold out every tenth camera.
     let mut kept = Vec::new();
     let mut held_out = Vec::new();
@@ -429,6 +474,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
         held_out,
         pitch_m,
         view_pitch_m,
+        feature: smallest_feature_m(name).map(|f| (f, view_px)),
         capture_px,
         per_hemisphere,
         rb,
@@ -475,6 +521,8 @@ fn evaluate_loaded(
 ) -> Result<Loaded, EvalError> {
     let lum = p.lum.as_ref();
     let centre = lum.bounds().centre();
+    // Views look at the finest feature (the centre where it has none off the centre).
+    let target = lum.feature_centre();
     let mut notes = Vec::new();
     let mut targets = Vec::new();
     // Views and their references.
@@ -483,13 +531,7 @@ fn evaluate_loaded(
     for &(g, c) in &cfg.directions_deg {
         let w = direction(g, c);
         for &d in &cfg.outside_m {
-            outside.push(framed_view(
-                centre + w * d,
-                centre,
-                p.rb,
-                p.view_pitch_m,
-                cfg.max_view_px,
-            ));
+            outside.push(p.view(centre + w * d, target, cfg.max_view_px));
         }
         for &d in &cfg.inside_m {
             let min = p.rb + 0.05;
@@ -499,13 +541,7 @@ fn evaluate_loaded(
             } else {
                 d
             };
-            inside.push(framed_view(
-                centre + w * d2,
-                centre,
-                p.rb,
-                p.view_pitch_m,
-                cfg.max_view_px,
-            ));
+            inside.push(p.view(centre + w * d2, target, cfg.max_view_px));
         }
     }
     notes.dedup();
@@ -516,15 +552,20 @@ fn evaluate_loaded(
             // From the removed camera's pose at the views' pitch where that is finer than the
             // captures' (a feature the captures resolve with few pixels has no interior at their
             // pitch), cropped about the principal point like the other views.
-            let s = (p.pitch_m / p.view_pitch_m).max(1.0);
+            let s = (p.pitch_m / p.view_pitch((target - c.position_m).normalize_or_zero())).max(1.0);
             let side = |n: u32| ((f64::from(n) * s).ceil() as u32).clamp(8, cfg.max_view_px.max(8));
             let (w, h) = if s > 1.0 {
                 (side(k.width), side(k.height))
             } else {
                 (k.width, k.height)
             };
-            let shift = DVec2::new(f64::from(k.width), f64::from(k.height)) * s * 0.5
-                - DVec2::new(f64::from(w), f64::from(h)) * 0.5;
+            // The crop is centred on the feature's pixel, kept inside the image.
+            let full = DVec2::new(f64::from(k.width), f64::from(k.height)) * s;
+            let crop = DVec2::new(f64::from(w), f64::from(h));
+            let rel = target - c.position_m;
+            let z = rel.dot(c.forward).max(1e-9);
+            let at = k.principal_px * s + k.focal_px * s * DVec2::new(rel.dot(c.right), rel.dot(c.down)) / z;
+            let shift = (at - 0.5 * crop).clamp(DVec2::ZERO, (full - crop).max(DVec2::ZERO));
             View {
                 camera: c.clone(),
                 intrinsics: Intrinsics {
@@ -533,6 +574,7 @@ fn evaluate_loaded(
                     principal_px: k.principal_px * s - shift,
                     focal_px: k.focal_px * s,
                 },
+                margin_px: margin_px(s),
             }
         })
         // Held-out cameras that see nothing (the dark hemisphere) measure nothing.
@@ -579,7 +621,7 @@ fn evaluate_loaded(
     let sweep: Vec<View> = (0..=steps)
         .map(|k| {
             let w = direction(40.0, 10.0 + k as f64 * cfg.sweep_step_deg);
-            framed_view(centre + w * 2.0, centre, p.rb, p.view_pitch_m, cfg.max_sweep_px)
+            p.view(centre + w * 2.0, target, cfg.max_sweep_px)
         })
         .collect();
     progress(&format!("{}: ray-casting {} sweep references", lum.name(), sweep.len()));
@@ -593,7 +635,13 @@ fn evaluate_loaded(
             for (v, t) in views.iter().zip(refs) {
                 let img = render_view(r, &mut targets, v)?;
                 let k = &v.intrinsics;
-                out.push(compare_view(&img, t, k.width as usize, k.height as usize));
+                out.push(compare_view_with_margin(
+                    &img,
+                    t,
+                    k.width as usize,
+                    k.height as usize,
+                    v.margin_px,
+                ));
             }
             Ok(out)
         };

@@ -87,7 +87,7 @@ pub(crate) fn rect_bounds(r: &Rect, z0: f64, z1: f64) -> Aabb {
     }
 }
 
-/// Segments of proxy-mesh discs (an inscribed polygon; area 0.04 % smaller than the disc).
+/// Segments of proxy-mesh discs (polygons of the disc's area, [`ProxyMesh::add_disc`]).
 const DISC_SEGMENTS: u32 = 128;
 
 // ---------------------------------------------------------------------------------------------------
@@ -526,12 +526,21 @@ impl Luminaire for LedDots {
     fn max_luminance(&self) -> f64 {
         self.luminance
     }
+    fn feature_centre(&self) -> DVec3 {
+        let (x, y) = self.centre((self.nx - 1) / 2, (self.ny - 1) / 2);
+        DVec3::new(x, y, 0.0)
+    }
     fn proxy(&self) -> ProxyMesh {
         let mut m = ProxyMesh::new(self.name());
         for j in 0..self.ny {
             for i in 0..self.nx {
                 let (x, y) = self.centre(i, j);
-                m.add_disc(&format!("dot {i},{j}"), DVec3::new(x, y, 0.0), self.radius_m, 32);
+                m.add_disc(
+                    &format!("dot {i},{j}"),
+                    DVec3::new(x, y, 0.0),
+                    self.radius_m,
+                    DISC_SEGMENTS,
+                );
             }
         }
         m
@@ -689,6 +698,9 @@ impl Luminaire for Peak {
     }
     fn max_luminance(&self) -> f64 {
         self.l_peak.max(self.l_background)
+    }
+    fn feature_centre(&self) -> DVec3 {
+        DVec3::new(self.centre.0, self.centre.1, 0.0)
     }
     fn proxy(&self) -> ProxyMesh {
         let mut m = ProxyMesh::new(self.name());

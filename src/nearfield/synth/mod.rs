@@ -116,6 +116,14 @@ pub trait Luminaire: Send + Sync + std::fmt::Debug {
     /// The largest luminance (cd/m²) any ray can see.
     fn max_luminance(&self) -> f64;
 
+    /// Where close-up views of the luminaire look (m): the centre of its finest feature where that
+    /// lies off the centre (`peak`'s spot, the `led-dots` dot nearest the centre), else the centre of
+    /// [`Luminaire::bounds`]. A crop about the bounds' centre of an 8 × 4 dot array shows the gap
+    /// between four dots, and one of `peak` misses its spot.
+    fn feature_centre(&self) -> DVec3 {
+        self.bounds().centre()
+    }
+
     /// A triangle mesh of the surfaces where the luminance appears (for parallax-correct reprojection).
     fn proxy(&self) -> ProxyMesh;
 }

@@ -39,15 +39,16 @@ pub struct EvalArgs {
     #[arg(long, default_value_t = 3.0)]
     pub sweep_spacings: f64,
     /// Side of the orthographic views for intensity and flux, in pixels (they frame the bounding sphere).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 1024)]
     pub ortho_px: u32,
     /// Samples per capture pixel along each axis: 1 point-samples (the quality contract), N averages
     /// N × N over each pixel as a sensor does (docs/nearfield-rendering.md, "Known limits").
     #[arg(long, default_value_t = 1)]
     pub capture_samples: u32,
-    /// View pixels across a luminaire's smallest feature (the contract: 6).
-    #[arg(long, default_value_t = 6.0)]
-    pub feature_px: f64,
+    /// View pixels across a luminaire's smallest feature (default: the contract's, 14 for a dot or a
+    /// spot, 6 for a strip or a gap).
+    #[arg(long)]
+    pub feature_px: Option<f64>,
     /// Where synthetic scans are packed and cached (reused when the cameras match).
     #[arg(long, default_value = "target/eval")]
     pub work_dir: PathBuf,
@@ -95,8 +96,8 @@ pub fn eval(a: &EvalArgs) -> CliResult {
     if !(1..=8).contains(&a.capture_samples) {
         return Err(format!("--capture-samples {}: expected 1…8", a.capture_samples).into());
     }
-    if !(a.feature_px.is_finite() && (1.0..=64.0).contains(&a.feature_px)) {
-        return Err(format!("--feature-px {}: expected 1…64", a.feature_px).into());
+    if let Some(f) = a.feature_px.filter(|f| !(f.is_finite() && (1.0..=64.0).contains(f))) {
+        return Err(format!("--feature-px {f}: expected 1…64").into());
     }
     let cfg = EvalConfig {
         per_hemisphere: a.cameras,
