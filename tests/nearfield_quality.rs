@@ -202,3 +202,43 @@ fn cos10_meets_the_thresholds() {
         }
     }
 }
+
+#[test]
+fn cos100_meets_the_thresholds() {
+    // A cos¹⁰⁰ lobe (half-power half-width 6.7°) on the full-size layout of a real near-field
+    // goniophotometer, 28,000 cameras per hemisphere (change 3), holds the thresholds. Like
+    // cos10, not the whole contract: `nearest`'s billboard samples exactly the eye's direction, which
+    // is exact for a luminance that depends on the direction only, so its medians and held-out error
+    // are lower (0.017 % vs 0.41 % outside); and most views seen from γ ≥ 55° change by more than 25 %
+    // within 5 × 5 pixels (unmeasured) or are dark (left out, change 4).
+    for rep in evaluate_all(&["cos100"], "cos100", 128, 256) {
+        let c = mode(&rep, "continuous+proxy");
+        let n = mode(&rep, "nearest");
+        for (set, what, need) in [
+            (&c.outside, "outside", 3),
+            (&c.inside, "inside", 2),
+            (&c.held_out, "held-out", 1),
+        ] {
+            assert!(set.views >= need, "cos100 {what}: {} views measured", set.views);
+            let l = set.log_rmse.unwrap();
+            assert!(l < 0.01, "cos100 {what}: log RMSE {l}");
+            let m = set.median_rel.unwrap();
+            assert!(m < 0.02, "cos100 {what}: median {m}");
+        }
+        assert!(c.flux_error < 0.01, "cos100: flux error {}", c.flux_error);
+        assert!(c.jump < 0.02, "cos100: jump {}", c.jump);
+        for (a, b, what) in [
+            (c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE"),
+            (c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE"),
+            (c.outside.p95_rel, n.outside.p95_rel, "outside p95"),
+            (Some(c.flux_error), Some(n.flux_error), "flux"),
+            (Some(c.intensity_median), Some(n.intensity_median), "intensity median"),
+            (Some(c.intensity_max), Some(n.intensity_max), "intensity max"),
+            (Some(c.jump), Some(n.jump), "jump"),
+        ] {
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!(a <= b, "cos100: {what}: continuous+proxy {a} vs nearest {b}");
+            }
+        }
+    }
+}
