@@ -41,7 +41,8 @@ struct Lum {
     grid: vec4<u32>,
     // Word offsets in `lists`: triangle offsets, triangle items, nearest offsets, nearest items.
     lists_a: vec4<u32>,
-    // idw4 offsets, idw4 items, unused, unused.
+    // idw4 offsets, idw4 items, first entry of the quadratic stencils in `tris` (7 per triangle,
+    // src/nearfield/select/gpu.rs), unused.
     lists_b: vec4<u32>,
     // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z, w unused.
     gap: vec4<f32>,
@@ -311,12 +312,15 @@ fn cell_of(u: vec3<f32>) -> u32 {
 struct Selected {
     cam: vec4<u32>,
     w: vec4<f32>,
+    // Continuous: the triangle, else EMPTY.
+    tri: u32,
 };
 
 fn select_continuous(u: vec3<f32>, cell: u32) -> Selected {
     var out: Selected;
     out.cam = vec4<u32>(EMPTY);
     out.w = vec4<f32>(0.0);
+    out.tri = EMPTY;
     let start = lists[lum.lists_a.x + cell];
     let end = lists[lum.lists_a.x + cell + 1u];
     var best = -2.0;
@@ -349,6 +353,7 @@ fn select_continuous(u: vec3<f32>, cell: u32) -> Selected {
     }
     out.cam = vec4<u32>(ca, bitcast<u32>(tris[3u * best_t + 1u].w), bitcast<u32>(tris[3u * best_t + 2u].w), EMPTY);
     out.w = vec4<f32>(e / s, 0.0);
+    out.tri = best_t;
     return out;
 }
 
@@ -359,6 +364,7 @@ fn select_in_triangle(u: vec3<f32>, t: u32) -> Selected {
     var out: Selected;
     out.cam = vec4<u32>(EMPTY);
     out.w = vec4<f32>(0.0);
+    out.tri = EMPTY;
     let a = tris[3u * t];
     let b = tris[3u * t + 1u];
     let c = tris[3u * t + 2u];
@@ -374,6 +380,7 @@ fn select_in_triangle(u: vec3<f32>, t: u32) -> Selected {
     }
     out.cam = vec4<u32>(bitcast<u32>(a.w), bitcast<u32>(b.w), bitcast<u32>(c.w), EMPTY);
     out.w = vec4<f32>(ep / sum, 0.0);
+    out.tri = t;
     return out;
 }
 
@@ -382,6 +389,7 @@ fn select_nearest(u: vec3<f32>, cell: u32, k4: bool) -> Selected {
     var out: Selected;
     out.cam = vec4<u32>(EMPTY);
     out.w = vec4<f32>(0.0);
+    out.tri = EMPTY;
     var off = lum.lists_a.z;
     var items = lum.lists_a.w;
     if (k4) {
@@ -698,6 +706,9 @@ fn shade(in: VsOut) -> Shaded {
     var l_max = 0.0;
     var l_lit = 0.0;
     var w_lit = 0.0;
+    // Per selected camera: ln L where it votes with light (the quadratic correction's corners).
+    var lf = vec4<f32>(0.0);
+    var n_lit = 0u;
     // (Written as plain loops: lavapipe ran the pass 1.6× slower, in every mode, with this in a
     // helper function returning a struct.)
     var blocked = vec4<bool>(false);
@@ -726,7 +737,9 @@ fn shade(in: VsOut) -> Shaded {
             l = l + sel.w[i] * li;
             wsum = wsum + sel.w[i];
             if (li > 0.0) {
-                log_l = log_l + sel.w[i] * log(li);
+                lf[i] = log(li);
+                n_lit = n_lit + 1u;
+                log_l = log_l + sel.w[i] * lf[i];
                 l_lit = l_lit + sel.w[i] * li;
                 w_lit = w_lit + sel.w[i];
                 l_min = min(l_min, li);
@@ -746,7 +759,52 @@ fn shade(in: VsOut) -> Shaded {
         if (SELECTION == 2u && all_lit && l > 0.0) {
             // ln 8 … ln 64.
             let t = max(smoothstep(2.0794415, 4.1588831, log(l_max / l_min)), smoothstep(0.05, 0.25, spread));
-            l = mix(exp(log_l / wsum), l, t);
+            var mean_log = log_l / wsum;
+            // Quadratic directional interpolation (src/nearfield/select/quadratic.rs), with the proxy
+            // (without it each camera samples another point of the surface, and the differences are
+            // not directional): where the three corners vote with light, the three cameras across the
+            // triangle's edges are sampled at the same point, and −½ Σ wₚ w_q κ_pq (κ from the six values through the triangle's stencil)
+            // corrects the blend's second-order error. Only inside the log regime, and only where the
+            // neighbours see light within 8× of the corners and no footprint of the six spans an edge
+            // (spread under 0.05): there the cameras differ by where they sample, not by direction.
+            // Corners that agree within the storage's quantisation (a diffuse surface) have nothing
+            // to correct, and skip the three extra samples.
+            if (PROXY && spread < 0.05 && n_lit == 3u && sel.tri != EMPTY && wsum > 0.0
+                && l_max > 1.002 * l_min && l_max <= 8.0 * l_min) {
+                let qb = lum.lists_b.z + 7u * sel.tri;
+                let q0 = bitcast<vec4<u32>>(tris[qb]);
+                if (q0.w == 1u) {
+                    var fnb = vec3<f32>(0.0);
+                    var ok = true;
+                    var lo = l_min;
+                    var hi = l_max;
+                    for (var k = 0u; k < 3u; k = k + 1u) {
+                        let cn = q0[k];
+                        var ln = 0.0;
+                        if (!(PROXY && VISIBILITY && lum.bvh.z != 0u
+                            && occluded(p, bitcast<vec3<f32>>(cameras[6u * cn + 5u].xyz)))) {
+                            ln = camera_luminance(cn, p, v, proxy);
+                        }
+                        ok = ok && ln > 0.0;
+                        fnb[k] = log(max(ln, 1e-30));
+                        lo = min(lo, ln);
+                        hi = max(hi, ln);
+                    }
+                    if (ok && hi <= 8.0 * lo && spread < 0.05) {
+                        let fv = lf.xyz;
+                        let k0 = dot(tris[qb + 1u].xyz, fv) + dot(tris[qb + 2u].xyz, fnb);
+                        let k1 = dot(tris[qb + 3u].xyz, fv) + dot(tris[qb + 4u].xyz, fnb);
+                        let k2 = dot(tris[qb + 5u].xyz, fv) + dot(tris[qb + 6u].xyz, fnb);
+                        let w = sel.w.xyz / wsum;
+                        let corr = -0.5 * (w.x * w.y * k0 + w.y * w.z * k1 + w.z * w.x * k2);
+                        // Corrections under the storage's quantisation (2⁻¹¹) are its noise, not a
+                        // curvature: faded out below it.
+                        let keep = smoothstep(0.00024, 0.00049, abs(corr));
+                        mean_log = mean_log + keep * clamp(corr, -0.5, 0.5);
+                    }
+                }
+            }
+            l = mix(exp(mean_log), l, t);
         }
     }
     out.l = l;

@@ -164,81 +164,55 @@ fn strips_meet_the_contract() {
     run_fine(&["strips"], "strips", 2400);
 }
 
+/// A cosⁿ lobe: the thresholds and not worse than nearest on any metric (`check`), with
+/// fewer measured views than the other luminaires: from the steep side of a lobe the luminance changes
+/// by more than 25 % within 5 × 5 pixels (unmeasured, change 5) or the view is dark (left out,
+/// change 4). Needs at least `need` measured views per set (outside, inside, held-out).
+fn check_lobe(rep: &LuminaireReport, need: [usize; 3]) {
+    let c = mode(rep, "continuous+proxy");
+    for (set, what, n) in [
+        (&c.outside, "outside", need[0]),
+        (&c.inside, "inside", need[1]),
+        (&c.held_out, "held-out", need[2]),
+    ] {
+        assert!(set.views >= n, "{}: {what}: {} views measured", rep.name, set.views);
+    }
+    let relaxed = LuminaireReport {
+        modes: rep
+            .modes
+            .iter()
+            .map(|m| {
+                let mut m = m.clone();
+                for set in [&mut m.outside, &mut m.inside, &mut m.held_out] {
+                    // `check`'s two-measured-per-unmeasured rule is replaced by the counts above.
+                    set.unmeasured = 0;
+                }
+                m
+            })
+            .collect(),
+        ..rep.clone()
+    };
+    check(&relaxed);
+}
+
 #[test]
-fn cos10_meets_the_thresholds() {
-    // A cos¹⁰ lobe (2,969 cameras per hemisphere: 1/8 of its half-power half-width apart) holds the
-    // issue's thresholds with the log blend, which a linear blend or a blend that turns linear too
-    // early does not (log RMSE 0.031 and 0.017: docs/nearfield-rendering.md, "Known limits"). Not
-    // the whole contract: from inside the sphere `nearest` has the lower median (its billboard
-    // samples exactly the eye's direction, and this luminance depends on the direction only), and a
-    // third of the inside views change by more than 25 % within 5 × 5 pixels (unmeasured).
+fn cos10_meets_the_contract_on_its_measured_views() {
+    // A cos¹⁰ lobe (2,969 cameras per hemisphere: 1/8 of its half-power half-width apart). The log
+    // blend and the quadratic directional interpolation (src/nearfield/select/quadratic.rs) carry
+    // it: with a linear blend the log RMSE is 0.031, with the log blend alone the inside median is
+    // 0.50 % against nearest's 0.019 % (nearest's billboard samples exactly the eye's direction, which
+    // is exact for a luminance that depends on the direction only); with the correction 0.008 %.
     for rep in evaluate_all(&["cos10"], "cos10", 128, 256) {
-        let c = mode(&rep, "continuous+proxy");
-        let n = mode(&rep, "nearest");
-        for (set, what, need) in [
-            (&c.outside, "outside", 6),
-            (&c.inside, "inside", 4),
-            (&c.held_out, "held-out", 2),
-        ] {
-            assert!(set.views >= need, "cos10 {what}: {} views measured", set.views);
-            let l = set.log_rmse.unwrap();
-            assert!(l < 0.01, "cos10 {what}: log RMSE {l}");
-            let m = set.median_rel.unwrap();
-            assert!(m < 0.02, "cos10 {what}: median {m}");
-        }
-        assert!(c.flux_error < 0.01, "cos10: flux error {}", c.flux_error);
-        assert!(c.jump < 0.02, "cos10: jump {}", c.jump);
-        for (a, b, what) in [
-            (c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE"),
-            (c.outside.median_rel, n.outside.median_rel, "outside median"),
-            (c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE"),
-            (Some(c.flux_error), Some(n.flux_error), "flux"),
-            (Some(c.intensity_max), Some(n.intensity_max), "intensity max"),
-            (Some(c.jump), Some(n.jump), "jump"),
-        ] {
-            if let (Some(a), Some(b)) = (a, b) {
-                assert!(a <= b, "cos10: {what}: continuous+proxy {a} vs nearest {b}");
-            }
-        }
+        check_lobe(&rep, [6, 4, 2]);
     }
 }
 
 #[test]
-fn cos100_meets_the_thresholds() {
+fn cos100_meets_the_contract_on_its_measured_views() {
     // A cos¹⁰⁰ lobe (half-power half-width 6.7°) on the full-size layout of a real near-field
-    // goniophotometer, 28,000 cameras per hemisphere (change 3), holds the thresholds. Like
-    // cos10, not the whole contract: `nearest`'s billboard samples exactly the eye's direction, which
-    // is exact for a luminance that depends on the direction only, so its medians and held-out error
-    // are lower (0.017 % vs 0.41 % outside); and most views seen from γ ≥ 55° change by more than 25 %
-    // within 5 × 5 pixels (unmeasured) or are dark (left out, change 4).
+    // goniophotometer, 28,000 cameras per hemisphere (change 3). Without the quadratic correction
+    // its medians were 0.41 % / 0.32 % against nearest's 0.017 % / 0.010 %; with it 0.015 % / 0.010 %.
     for rep in evaluate_all(&["cos100"], "cos100", 128, 256) {
-        let c = mode(&rep, "continuous+proxy");
-        let n = mode(&rep, "nearest");
-        for (set, what, need) in [
-            (&c.outside, "outside", 3),
-            (&c.inside, "inside", 2),
-            (&c.held_out, "held-out", 1),
-        ] {
-            assert!(set.views >= need, "cos100 {what}: {} views measured", set.views);
-            let l = set.log_rmse.unwrap();
-            assert!(l < 0.01, "cos100 {what}: log RMSE {l}");
-            let m = set.median_rel.unwrap();
-            assert!(m < 0.02, "cos100 {what}: median {m}");
-        }
-        assert!(c.flux_error < 0.01, "cos100: flux error {}", c.flux_error);
-        assert!(c.jump < 0.02, "cos100: jump {}", c.jump);
-        for (a, b, what) in [
-            (c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE"),
-            (c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE"),
-            (c.outside.p95_rel, n.outside.p95_rel, "outside p95"),
-            (Some(c.flux_error), Some(n.flux_error), "flux"),
-            (Some(c.intensity_median), Some(n.intensity_median), "intensity median"),
-            (Some(c.intensity_max), Some(n.intensity_max), "intensity max"),
-            (Some(c.jump), Some(n.jump), "jump"),
-        ] {
-            if let (Some(a), Some(b)) = (a, b) {
-                assert!(a <= b, "cos100: {what}: continuous+proxy {a} vs nearest {b}");
-            }
-        }
+        check_lobe(&rep, [3, 2, 1]);
     }
 }

@@ -737,9 +737,12 @@ impl NearfieldPass {
                 }
                 None => [0; 4],
             };
+            // The quadratic stencils (src/nearfield/select/quadratic.rs), after them.
+            let quad_base = geometry.len() as u32;
+            geometry.extend_from_slice(&g.quadratic);
             for (what, bytes) in [
                 ("camera records", cams.len() * 16),
-                ("selection triangles and proxy BVH", geometry.len() * 16),
+                ("selection triangles, proxy BVH and stencils", geometry.len() * 16),
                 ("selection lists", lists.len() * 4),
             ] {
                 if bytes as u64 > max_binding {
@@ -754,7 +757,7 @@ impl NearfieldPass {
                 content: [sphere.0.x as f32, sphere.0.y as f32, sphere.0.z as f32, content as f32],
                 grid: [g.n_phi, g.n_theta, chunks.table_chunks, 0],
                 lists_a: [tri_off, tri_items, n1_off, n1_items],
-                lists_b: [n4_off, n4_items, 0, 0],
+                lists_b: [n4_off, n4_items, quad_base, 0],
                 bvh: bvh_bases,
                 // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm).
                 gap: [g.cos_max_gap, (1e-4 * content).max(1e-6) as f32, 0.0, 0.0],

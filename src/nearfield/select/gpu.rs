@@ -34,7 +34,14 @@ pub struct SelectionGpu {
     pub n_theta: u32,
     /// cos(max gap): Nearest/Idw4 skip vertices with u · d below it.
     pub cos_max_gap: f32,
+    /// [`QUADRATIC_ENTRIES`] entries per triangle: `[camera(n₀), camera(n₁), camera(n₂), 1]` (bit-cast;
+    /// 0 in the last word: no stencil), then the rows of K ([`super::quadratic`]) as two entries each
+    /// (the triangle's three coefficients, then the neighbours', w = 0).
+    pub quadratic: Vec<[f32; 4]>,
 }
+
+/// Entries of [`SelectionGpu::quadratic`] per triangle.
+pub const QUADRATIC_ENTRIES: usize = 7;
 
 impl SelectionGpu {
     /// Bytes of all arrays plus the three scalars (12 bytes).
@@ -45,7 +52,7 @@ impl SelectionGpu {
             + self.near1_items.len()
             + self.near4_offsets.len()
             + self.near4_items.len();
-        16 * (self.triangles.len() + self.vertices.len()) as u64 + 4 * words as u64 + 12
+        16 * (self.triangles.len() + self.vertices.len() + self.quadratic.len()) as u64 + 4 * words as u64 + 12
     }
 }
 
@@ -69,6 +76,21 @@ impl Selection {
             .zip(&self.vertex_camera)
             .map(|(d, &c)| [d.x as f32, d.y as f32, d.z as f32, f32::from_bits(c)])
             .collect();
+        let mut quadratic = Vec::with_capacity(QUADRATIC_ENTRIES * self.tris.len());
+        for t in 0..self.tris.len() {
+            match self.stencil(t) {
+                Some(st) => {
+                    let cam = st.neighbours.map(|v| f32::from_bits(self.vertex_camera[v as usize]));
+                    quadratic.push([cam[0], cam[1], cam[2], f32::from_bits(1)]);
+                    for row in &st.k {
+                        let r = row.map(|v| v as f32);
+                        quadratic.push([r[0], r[1], r[2], 0.0]);
+                        quadratic.push([r[3], r[4], r[5], 0.0]);
+                    }
+                }
+                None => quadratic.extend(std::iter::repeat_n([0.0; 4], QUADRATIC_ENTRIES)),
+            }
+        }
         SelectionGpu {
             triangles,
             vertices,
@@ -81,6 +103,7 @@ impl Selection {
             n_phi: self.grid.n_phi,
             n_theta: self.grid.n_theta,
             cos_max_gap: self.cos_max_gap as f32,
+            quadratic,
         }
     }
 
@@ -90,7 +113,7 @@ impl Selection {
             .iter()
             .map(|c| c.offsets.len() + c.items.len())
             .sum::<usize>();
-        16 * (3 * self.tris.len() + self.dirs.len()) as u64 + 4 * words as u64 + 12
+        16 * ((3 + QUADRATIC_ENTRIES) * self.tris.len() + self.dirs.len()) as u64 + 4 * words as u64 + 12
     }
 }
 

@@ -96,6 +96,7 @@
 
 mod gpu;
 mod grid;
+pub mod quadratic;
 mod spherical;
 mod tables;
 mod triangulation;
@@ -322,6 +323,8 @@ pub struct Selection {
     tri_cells: Csr,
     near1: Csr,
     near4: Csr,
+    /// Per triangle: its quadratic stencil ([`quadratic`]), where it has one.
+    stencils: Vec<Option<quadratic::Stencil>>,
 }
 
 /// The median of `v` (the upper one for an even count; NaN when empty). Sorts `v`.
@@ -401,6 +404,7 @@ impl Selection {
         let tri_cells = triangle_lists(&grid, &sph, &caps, &listed)?;
         let r0 = if median_edge.is_finite() { median_edge } else { 0.1 };
         let (near1, near4) = near_lists(&grid, &dirs, max_gap, r0)?;
+        let stencils = quadratic::stencils(&dirs, &mesh.tris, &cross, &hole);
         Ok(Self {
             cameras: set.cameras.len(),
             merged_groups: v.merged_groups,
@@ -419,7 +423,14 @@ impl Selection {
             tri_cells,
             near1,
             near4,
+            stencils,
         })
+    }
+
+    /// The quadratic stencil of triangle `t` ([`quadratic`]): `None` for a hole, a triangle at the
+    /// edge of the mesh or next to a hole, or one out of range.
+    pub fn stencil(&self, t: usize) -> Option<&quadratic::Stencil> {
+        self.stencils.get(t).and_then(|s| s.as_ref())
     }
 
     /// The cameras and weights for the view direction `u` (normalised here; a zero or non-finite `u`
@@ -561,6 +572,10 @@ impl Selection {
                     for &t in list {
                         if !self.hole[t as usize] {
                             out.extend(self.tris[t as usize].iter().map(|&v| self.vertex_camera[v as usize]));
+                            // The quadratic correction samples the neighbours across its edges too.
+                            if let Some(st) = self.stencil(t as usize) {
+                                out.extend(st.neighbours.iter().map(|&v| self.vertex_camera[v as usize]));
+                            }
                         }
                     }
                 }
