@@ -107,7 +107,7 @@ use std::fmt;
 
 use glam::DVec3;
 
-pub use gpu::{SelectionGpu, HOLE_CAMERA};
+pub use gpu::{SelectionGpu, HOLE_CAMERA, QUADRATIC_ENTRIES};
 pub use grid::{MAX_THETA_CELLS, MIN_THETA_CELLS};
 
 use self::grid::CellGrid;
