@@ -267,10 +267,13 @@ fn sample_camera(cam: Cam, px: vec2<f32>, lit_only: bool) -> f32 {
     let t = footprint(cam, i.x, i.y);
     let w = vec4<f32>((1.0 - f.x) * (1.0 - f.y), f.x * (1.0 - f.y), (1.0 - f.x) * f.y, f.x * f.y);
     let l = dot(w, t);
-    // Spatial spread of the footprint: Σ wᵢ·|tᵢ − l| / l (0 where the camera sees a smooth surface,
-    // up to 2 across an edge or a spot under a pixel; continuous in the weights).
-    let dev = dot(w, abs(t - vec4<f32>(l)));
-    spread = max(spread, select(0.0, dev / l, l > 0.0));
+    // Spatial spread of the footprint in log luminance: Σ wᵢ·|ln tᵢ − ln l| (dark texels count as
+    // 10⁻³ l). About half the log step per pixel on a smooth gradient (a steep cosⁿ flank: 0.1), and
+    // far more across an edge or a spot under a pixel; continuous in the weights.
+    if (l > 0.0) {
+        let dev = dot(w, abs(log(max(t, vec4<f32>(1e-3 * l))) - vec4<f32>(log(l))));
+        spread = max(spread, dev);
+    }
     if (!lit_only) {
         return l;
     }
@@ -691,7 +694,7 @@ fn shade(in: VsOut) -> Shaded {
     // three: 100 cd/m² instead of 3·10⁵): there the blend turns linear, smoothly from a ratio of 8 to
     // one of 64 between the largest and smallest sample, and wholly where a camera sees no light. It
     // also turns linear where a camera's own footprint spans an edge (its spatial spread, see
-    // sample_camera, from 0.05 to 0.25): the cameras then disagree because each samples the edge at
+    // sample_camera, from 0.2 to 0.5): the cameras then disagree because each samples the edge at
     // other points, not because the luminance changes with direction, and a geometric mean of such
     // samples loses light (peak's flux error 0.96 → 0.65 %). With the proxy, a camera none of whose
     // footprint texels holds light where others see it lit has not sampled the surface there (a dot
@@ -758,7 +761,7 @@ fn shade(in: VsOut) -> Shaded {
         l = l / wsum;
         if (SELECTION == 2u && all_lit && l > 0.0) {
             // ln 8 … ln 64.
-            let t = max(smoothstep(2.0794415, 4.1588831, log(l_max / l_min)), smoothstep(0.05, 0.25, spread));
+            let t = max(smoothstep(2.0794415, 4.1588831, log(l_max / l_min)), smoothstep(0.2, 0.5, spread));
             var mean_log = log_l / wsum;
             // Quadratic directional interpolation (src/nearfield/select/quadratic.rs), with the proxy
             // (without it each camera samples another point of the surface, and the differences are
@@ -766,10 +769,10 @@ fn shade(in: VsOut) -> Shaded {
             // triangle's edges are sampled at the same point, and −½ Σ wₚ w_q κ_pq (κ from the six values through the triangle's stencil)
             // corrects the blend's second-order error. Only inside the log regime, and only where the
             // neighbours see light within 8× of the corners and no footprint of the six spans an edge
-            // (spread under 0.05): there the cameras differ by where they sample, not by direction.
+            // (spread under 0.15): there the cameras differ by where they sample, not by direction.
             // Corners that agree within the storage's quantisation (a diffuse surface) have nothing
             // to correct, and skip the three extra samples.
-            if (PROXY && spread < 0.05 && n_lit == 3u && sel.tri != EMPTY && wsum > 0.0
+            if (PROXY && spread < 0.15 && n_lit == 3u && sel.tri != EMPTY && wsum > 0.0
                 && l_max > 1.002 * l_min && l_max <= 8.0 * l_min) {
                 let qb = lum.lists_b.z + 7u * sel.tri;
                 let q0 = bitcast<vec4<u32>>(tris[qb]);
@@ -790,7 +793,7 @@ fn shade(in: VsOut) -> Shaded {
                         lo = min(lo, ln);
                         hi = max(hi, ln);
                     }
-                    if (ok && hi <= 8.0 * lo && spread < 0.05) {
+                    if (ok && hi <= 8.0 * lo && spread < 0.15) {
                         let fv = lf.xyz;
                         let k0 = dot(tris[qb + 1u].xyz, fv) + dot(tris[qb + 2u].xyz, fnb);
                         let k1 = dot(tris[qb + 3u].xyz, fv) + dot(tris[qb + 4u].xyz, fnb);

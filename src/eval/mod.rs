@@ -196,16 +196,26 @@ pub struct ModeReport {
     pub worst_view: Option<usize>,
 }
 
+/// Largest change of ln L per view pixel across a cosⁿ lobe (change 8): 4 steps of it stay within
+/// the interior test's factor 1.25 (ln 1.25 = 0.223) with room to spare.
+pub const LOBE_STEP: f64 = 0.04;
+
+/// The exponent n of a synthetic luminaire's cosⁿ intensity lobe (`cos10`, `cos100`; `None` for the
+/// others: `cos1` is Lambertian).
+pub fn lobe_exponent(name: &str) -> Option<f64> {
+    match name {
+        "cos10" => Some(10.0),
+        "cos100" => Some(100.0),
+        _ => None,
+    }
+}
+
 /// The angular feature (degrees) of a synthetic luminaire's directional distribution that the camera
 /// layout must resolve: the half-power half-width of a cosⁿ lobe, acos(0.5^(1/n)); `None` for
 /// luminaires whose luminance does not depend on the direction (Lambertian) or has no lobe to sample
 /// (the reflector's highlights are judged without a threshold).
 pub fn angular_feature_deg(name: &str) -> Option<f64> {
-    let n: f64 = match name {
-        "cos10" => 10.0,
-        "cos100" => 100.0,
-        _ => return None,
-    };
+    let n = lobe_exponent(name)?;
     Some(0.5f64.powf(1.0 / n).acos().to_degrees())
 }
 
@@ -337,16 +347,35 @@ impl Prepared {
     /// finer where the smallest feature as the view sees it, foreshortened by the cosine between the
     /// view and the luminaire's axis (its features lie in planes z = const), would get fewer pixels
     /// than its rule asks (changes 2 and 7 of docs/quality-metrics.md).
-    fn view_pitch(&self, forward: DVec3) -> f64 {
-        self.feature.map_or(self.pitch_m, |(f, px)| {
+    ///
+    /// For a cosⁿ lobe (change 8) the pitch is also fine enough that the luminance changes by at most
+    /// [`LOBE_STEP`] per pixel: across a view from distance d a pixel turns the direction to the eye
+    /// by pitch / d, and ln L = (n − 1) ln cos γ changes by (n − 1) tan γ per radian.
+    fn view_pitch(&self, eye: DVec3, target: DVec3) -> f64 {
+        let to = target - eye;
+        let forward = to.normalize_or_zero();
+        let pitch = self.feature.map_or(self.pitch_m, |(f, px)| {
             self.pitch_m.min(f * forward.z.abs().max(0.05) / px)
-        })
+        });
+        match self.lobe {
+            Some(k) => {
+                let c = forward.z.abs().clamp(0.05, 1.0);
+                let tan = (1.0 - c * c).sqrt() / c;
+                let rate = k * tan / to.length().max(1e-3);
+                if rate > 0.0 {
+                    pitch.min(LOBE_STEP / rate).max(pitch / 8.0)
+                } else {
+                    pitch
+                }
+            }
+            None => pitch,
+        }
     }
 
     /// A view along `forward` at [`Prepared::view_pitch`], from `eye` looking at `target`, with its
     /// interior margin.
     fn view(&self, eye: DVec3, target: DVec3, max_px: u32) -> View {
-        let pitch = self.view_pitch((target - eye).normalize_or_zero());
+        let pitch = self.view_pitch(eye, target);
         let mut v = framed_view(eye, target, self.rb, pitch, max_px);
         v.margin_px = margin_px(self.pitch_m / pitch);
         v
@@ -367,6 +396,8 @@ struct Prepared {
     view_pitch_m: f64,
     /// The smallest feature (m) and the view pixels across it, where the luminaire has one.
     feature: Option<(f64, f64)>,
+    /// The exponent n − 1 of a cosⁿ lobe's luminance, where the luminaire is one.
+    lobe: Option<f64>,
     capture_px: u32,
     per_hemisphere: usize,
     rb: f64,
@@ -475,6 +506,7 @@ fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> Result<Prep
         pitch_m,
         view_pitch_m,
         feature: smallest_feature_m(name).map(|f| (f, view_px)),
+        lobe: lobe_exponent(name).map(|n| n - 1.0),
         capture_px,
         per_hemisphere,
         rb,
@@ -552,7 +584,7 @@ fn evaluate_loaded(
             // From the removed camera's pose at the views' pitch where that is finer than the
             // captures' (a feature the captures resolve with few pixels has no interior at their
             // pitch), cropped about the principal point like the other views.
-            let s = (p.pitch_m / p.view_pitch((target - c.position_m).normalize_or_zero())).max(1.0);
+            let s = (p.pitch_m / p.view_pitch(c.position_m, target)).max(1.0);
             let side = |n: u32| ((f64::from(n) * s).ceil() as u32).clamp(8, cfg.max_view_px.max(8));
             let (w, h) = if s > 1.0 {
                 (side(k.width), side(k.height))
@@ -585,8 +617,18 @@ fn evaluate_loaded(
         lum.name(),
         outside.len() + inside.len() + held.len()
     ));
-    let reference =
-        |v: &View| -> Result<Vec<f32>, EvalError> { Ok(render_pinhole(lum, &v.camera, &v.intrinsics, 1)?.data) };
+    // Luminance under 10⁻⁷ of the luminaire's largest is dark (change 8): cos¹⁰⁰ seen from γ 55°
+    // is 10⁻²⁴ of its peak, which f32 still holds but nobody sees.
+    let dark = (1e-7 * lum.max_luminance()) as f32;
+    let reference = |v: &View| -> Result<Vec<f32>, EvalError> {
+        let mut img = render_pinhole(lum, &v.camera, &v.intrinsics, 1)?.data;
+        for x in &mut img {
+            if *x < dark {
+                *x = 0.0;
+            }
+        }
+        Ok(img)
+    };
     let refs_out: Vec<Vec<f32>> = outside.iter().map(reference).collect::<Result<_, _>>()?;
     let refs_in: Vec<Vec<f32>> = inside.iter().map(reference).collect::<Result<_, _>>()?;
     let refs_held: Vec<Vec<f32>> = held.iter().map(reference).collect::<Result<_, _>>()?;
