@@ -66,23 +66,9 @@ fn invert3(m: [[f64; 3]; 3]) -> Option<[[f64; 3]; 3]> {
 /// The stencil of every triangle (`None` for a hole, a triangle next to a hole or the mesh's edge,
 /// or a degenerate system). `tris` are vertex indices into `dirs`, `cross` their edge cross products.
 pub fn stencils(dirs: &[DVec3], tris: &[[u32; 3]], cross: &[[DVec3; 3]], hole: &[bool]) -> Vec<Option<Stencil>> {
-    // Edge (low, high) → the triangles on it.
-    let mut edges: std::collections::HashMap<(u32, u32), [u32; 2]> = std::collections::HashMap::new();
-    for (t, tri) in tris.iter().enumerate() {
-        if hole[t] {
-            continue;
-        }
-        for k in 0..3 {
-            let (a, b) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            let e = edges.entry((a.min(b), a.max(b))).or_insert([u32::MAX; 2]);
-            if e[0] == u32::MAX {
-                e[0] = t as u32;
-            } else {
-                e[1] = t as u32;
-            }
-        }
-    }
-    // Vertex → the vertices it shares a non-hole edge with.
+    // Per edge (low, high): how many non-hole triangles share it; per vertex: the vertices it shares
+    // a non-hole edge with.
+    let mut edges: std::collections::HashMap<(u32, u32), u8> = std::collections::HashMap::new();
     let mut ring: Vec<Vec<u32>> = vec![Vec::new(); dirs.len()];
     for (t, tri) in tris.iter().enumerate() {
         if hole[t] {
@@ -90,6 +76,7 @@ pub fn stencils(dirs: &[DVec3], tris: &[[u32; 3]], cross: &[[DVec3; 3]], hole: &
         }
         for k in 0..3 {
             let (a, b) = (tri[k], tri[(k + 1) % 3]);
+            *edges.entry((a.min(b), a.max(b))).or_insert(0) += 1;
             ring[a as usize].push(b);
             ring[b as usize].push(a);
         }
@@ -107,8 +94,7 @@ pub fn stencils(dirs: &[DVec3], tris: &[[u32; 3]], cross: &[[DVec3; 3]], hole: &
             // Every edge must have a neighbouring triangle (not at the mesh's edge or a hole's).
             for k in 0..3 {
                 let (p, q) = (tri[(k + 1) % 3], tri[(k + 2) % 3]);
-                let pair = edges.get(&(p.min(q), p.max(q)))?;
-                if pair[1] == u32::MAX {
+                if edges.get(&(p.min(q), p.max(q))).copied().unwrap_or(0) < 2 {
                     return None;
                 }
             }
