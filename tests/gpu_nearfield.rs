@@ -45,7 +45,11 @@ fn packed(name: &str, n: usize, size: u32) -> (Arc<Pack>, Box<dyn synth::Luminai
 }
 
 fn eye_camera(eye: DVec3, size: u32, fov_deg: f64) -> (Camera, Intrinsics) {
-    let (right, down, forward) = look_at_basis(-eye);
+    eye_camera_at(eye, DVec3::ZERO, size, fov_deg)
+}
+
+fn eye_camera_at(eye: DVec3, target: DVec3, size: u32, fov_deg: f64) -> (Camera, Intrinsics) {
+    let (right, down, forward) = look_at_basis(target - eye);
     let cam = Camera {
         position_m: eye,
         right,
@@ -349,14 +353,19 @@ fn streaming_under_a_quarter_budget_renders_the_resident_image() {
         _ => unreachable!(),
     };
     assert!(!small_lum.fully_resident);
-    let views: Vec<DVec3> = (0..6)
+    // Six views of the whole luminaire, then close-ups of its corners from inside the capture sphere
+    // and from outside (their residency keeps only the cameras of the lines inside the frustum).
+    let mut views: Vec<(DVec3, DVec3, f64)> = (0..6)
         .map(|i| {
             let az = i as f64 * 1.1;
-            DVec3::new(1.2 * az.cos(), 1.2 * az.sin(), -1.6)
+            (DVec3::new(1.2 * az.cos(), 1.2 * az.sin(), -1.6), DVec3::ZERO, 12.0)
         })
         .collect();
-    for eye in views {
-        let (cam, k) = eye_camera(eye, 80, 12.0);
+    views.push((DVec3::new(0.2, 0.15, -0.3), DVec3::new(0.06, 0.05, 0.0), 6.0));
+    views.push((DVec3::new(-0.3, 0.1, -0.35), DVec3::new(-0.05, 0.06, 0.0), 5.0));
+    views.push((DVec3::new(0.9, -0.7, -1.3), DVec3::new(0.05, -0.06, 0.0), 2.0));
+    for (eye, target, fov) in views {
+        let (cam, k) = eye_camera_at(eye, target, 80, fov);
         let a = r.add_instance(full, Mat4::IDENTITY).unwrap();
         let img_full = render(&mut r, &cam, &k);
         r.remove_instance(a).unwrap();

@@ -755,3 +755,112 @@ fn bad_input_is_an_error_naming_the_argument() {
         assert!(!sel.select(mode, DVec3::new(0.2, 0.3, -0.9)).is_empty());
     }
 }
+
+/// The cells a view needs (`view_cells`, residency's input): with the view's frustum, a close-up
+/// keeps far fewer cells than the whole content ball, none outside that ball's set, and still every
+/// cell that a pixel's line through the content ball reaches (perspective from inside and outside the
+/// capture sphere, orthographic; a wide view keeps the ball's set).
+#[test]
+fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
+    use glam::{Mat4, Vec4};
+    use lumiview::gpu::camera::HostCamera;
+    use lumiview::gpu::nearfield::view_cells;
+    use lumiview::nearfield::rayset::look_at_basis;
+    let set = layout_set(
+        Layout::Rigo {
+            per_hemisphere: 2000,
+            overlap_deg: 2.0,
+            jitter_deg: 0.05,
+        },
+        5,
+    );
+    let sel = build(&set);
+    let s = sphere();
+    let (c, r, rc) = (s.centre_m, s.radius_m, 0.15);
+    // The line's cell on the capture sphere: its first intersection, as residency takes it.
+    let cell_of_line = |p: DVec3, v: DVec3| -> Option<usize> {
+        let os = p - c;
+        let b = os.dot(v);
+        let disc = b * b - (os.length_squared() - r * r);
+        (disc >= 0.0).then(|| sel.cell_of((p + (-b - disc.sqrt()) * v - c).normalize()))
+    };
+    let through_ball = |p: DVec3, v: DVec3| (c - p).cross(v).length() <= rc;
+    // (eye, target, vertical field of view in degrees (0: orthographic, 45 × 30 mm), how many times
+    // fewer cells the frustum must keep: from inside the capture sphere a close-up's lines through the
+    // ball spread over much of the sphere, from outside over a cap a few cells wide)
+    let views = [
+        (DVec3::new(0.25, 0.1, -0.3), DVec3::new(0.05, 0.03, 0.0), 4.0, 8.0),
+        (DVec3::new(-0.6, 0.8, -1.2), DVec3::new(-0.04, 0.06, 0.0), 2.0, 1.5),
+        (DVec3::new(0.5, -0.2, -1.0), DVec3::new(0.07, 0.0, 0.0), 0.0, 1.5),
+        (DVec3::new(0.8, 0.6, -1.6), DVec3::ZERO, 60.0, 1.0),
+    ];
+    for (eye, target, fov, fewer) in views {
+        let host = if fov > 0.0 {
+            let (right, down, forward) = look_at_basis(target - eye);
+            let cam = Camera {
+                position_m: eye,
+                right,
+                down,
+                forward,
+                intrinsics: None,
+                hemisphere: Hemisphere::Lower,
+                meta: Default::default(),
+                label: "eye".into(),
+            };
+            let f = 100.0 / (0.5 * f64::to_radians(fov)).tan();
+            let k = Intrinsics {
+                width: 300,
+                height: 200,
+                principal_px: DVec2::new(150.0, 100.0),
+                focal_px: DVec2::splat(f),
+            };
+            HostCamera::from_pinhole(&cam, &k, 0.01, 10.0)
+        } else {
+            HostCamera::from_ortho((eye - target).normalize(), target, 1e-4, 450, 300, 2.0)
+        };
+        let clip = host.clip_from_world();
+        let eye4 = host.eye_in(Mat4::IDENTITY);
+        let all = view_cells(&sel, (c, r), rc, eye4, None);
+        let kept = view_cells(&sel, (c, r), rc, eye4, Some(clip));
+        let all_set: std::collections::HashSet<usize> = all.iter().copied().collect();
+        assert!(
+            kept.iter().all(|k| all_set.contains(k)),
+            "frustum cells outside the ball's"
+        );
+        if fewer > 1.0 {
+            assert!(
+                kept.len() as f64 * fewer < all.len() as f64,
+                "eye {eye}: {} of {} cells kept",
+                kept.len(),
+                all.len()
+            );
+        } else {
+            assert_eq!(kept.len(), all.len(), "a wide view needs the whole ball");
+        }
+        let kept_set: std::collections::HashSet<usize> = kept.iter().copied().collect();
+        let inv = clip.inverse();
+        let n = 120;
+        let mut lines = 0;
+        for i in 0..=n {
+            for j in 0..=n {
+                let ndc = |z: f32| {
+                    let (x, y) = (2.0 * i as f32 / n as f32 - 1.0, 2.0 * j as f32 / n as f32 - 1.0);
+                    let h = inv * Vec4::new(x, y, z, 1.0);
+                    (h.truncate() / h.w).as_dvec3()
+                };
+                let (p0, p1) = (ndc(0.2), ndc(0.9));
+                let v = (p1 - p0).normalize();
+                if !through_ball(p0, v) {
+                    continue;
+                }
+                let Some(cell) = cell_of_line(p0, v) else { continue };
+                lines += 1;
+                assert!(
+                    kept_set.contains(&cell),
+                    "eye {eye}: pixel ({i}, {j})'s cell {cell} dropped"
+                );
+            }
+        }
+        assert!(lines > 100, "eye {eye}: only {lines} pixel lines meet the content ball");
+    }
+}

@@ -219,9 +219,17 @@ impl NearfieldLuminaire {
 
     /// Cameras any pixel of a view from `eye` (luminaire frame: w = 1 a point, w = 0 the direction
     /// towards an orthographic eye) can select in `mode`: those listed in the selection cells that the
-    /// view's lines through the content ball reach on the capture sphere (conservative).
-    pub fn cameras_for_view(&self, eye: Vec4, mode: SelectionMode) -> Vec<u32> {
-        let cells = view_cells(&self.selection, self.sphere, self.content_radius_m, eye);
+    /// view's lines through the content ball reach on the capture sphere (conservative). With
+    /// `clip_from_local`, only the lines inside the view's frustum count: a close-up needs the
+    /// cameras of the directions it shows, not of all the ball.
+    pub fn cameras_for_view(&self, eye: Vec4, clip_from_local: Option<Mat4>, mode: SelectionMode) -> Vec<u32> {
+        let cells = view_cells(
+            &self.selection,
+            self.sphere,
+            self.content_radius_m,
+            eye,
+            clip_from_local,
+        );
         self.selection.cameras_of_cells(mode, cells.into_iter())
     }
 
@@ -264,7 +272,7 @@ impl NearfieldLuminaire {
         let resident = if self.fully_resident {
             Vec::new()
         } else {
-            self.cameras_for_view(eye, mode)
+            self.cameras_for_view(eye, Some(clip_from_local), mode)
         };
         if !polygon {
             return (resident, None);
@@ -325,8 +333,17 @@ impl NearfieldLuminaire {
 
 /// The cells of `sel`'s grid that the lines of a view through the content ball reach on the capture
 /// sphere (first intersection of each line). Lines are sampled so that neighbouring samples land at
-/// most `step` apart on the sphere, and every cell within `step` of a sample is taken.
-pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, eye: Vec4) -> Vec<usize> {
+/// most `step` apart on the sphere, and every cell within `step` of a sample is taken. With
+/// `clip_from_local`, a sample counts only where its line is inside the view's frustum (the four
+/// side planes) or within twice the sample spacing of it, so that every line the view shows still
+/// has a counted sample within `step`.
+pub fn view_cells(
+    sel: &Selection,
+    sphere: (DVec3, f64),
+    content_radius_m: f64,
+    eye: Vec4,
+    clip_from_local: Option<Mat4>,
+) -> Vec<usize> {
     let (s, r) = sphere;
     let rc = content_radius_m.max(1e-6);
     let (n_phi, n_theta) = sel.grid();
@@ -346,6 +363,21 @@ pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, 
         let disc = b * b - (os.length_squared() - r * r);
         (disc >= 0.0).then(|| p + (-b - disc.sqrt()) * v)
     };
+    // The frustum's side planes (x = ±w, y = ±w in clip space), as (normal, offset) with a unit
+    // normal pointing inwards: for a perspective view they pass through the eye.
+    let planes: Vec<(DVec3, f64)> = clip_from_local
+        .map(|m| {
+            let row = |i: usize| m.row(i).as_dvec4();
+            [row(3) + row(0), row(3) - row(0), row(3) + row(1), row(3) - row(1)]
+                .into_iter()
+                .filter_map(|p| {
+                    let n = p.truncate();
+                    let len = n.length();
+                    (len > 0.0 && len.is_finite()).then(|| (n / len, p.w / len))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
     if eye.w > 0.5 {
         let to_c = s - e;
         let dist = to_c.length();
@@ -357,12 +389,18 @@ pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, 
         let amp = (dist + r) / (r * cos_i);
         let n_r = ((beta * amp / step).ceil() as usize).clamp(1, 4096);
         let (bx, by) = orthonormal(axis);
+        // Directions: a sample's neighbours are at most step / amp away (radians).
+        let slack = (2.0 * step / amp).min(1.0).sin();
+        let in_view = |d: DVec3| planes.iter().all(|(n, _)| n.dot(d) >= -slack);
         for k in 0..=n_r {
             let a = beta * k as f64 / n_r as f64;
             let n_a = ((std::f64::consts::TAU * a.sin() * amp / step).ceil() as usize).clamp(1, 65_536);
             for m in 0..n_a {
                 let phi = std::f64::consts::TAU * m as f64 / n_a as f64;
                 let d = axis * a.cos() + (bx * phi.cos() + by * phi.sin()) * a.sin();
+                if !in_view(d) {
+                    continue;
+                }
                 if let Some(q) = first_hit(e, d) {
                     add(q, &mut mark);
                 }
@@ -373,6 +411,9 @@ pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, 
         let (bx, by) = orthonormal(v);
         let spacing = step * r * cos_i;
         let n = ((rc / spacing).ceil() as i64).clamp(1, 4096);
+        // Parallel lines: a sample's neighbours are rc / n apart (m).
+        let slack = 2.0 * rc / n as f64;
+        let in_view = |p: DVec3| planes.iter().all(|(nrm, w)| nrm.dot(p) + w >= -slack);
         for i in -n..=n {
             for j in -n..=n {
                 let (x, y) = (i as f64 * rc / n as f64, j as f64 * rc / n as f64);
@@ -380,6 +421,9 @@ pub fn view_cells(sel: &Selection, sphere: (DVec3, f64), content_radius_m: f64, 
                     continue;
                 }
                 let p = s + bx * x + by * y;
+                if !in_view(p) {
+                    continue;
+                }
                 if let Some(q) = first_hit(p, v) {
                     add(q, &mut mark);
                 }

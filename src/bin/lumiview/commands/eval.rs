@@ -45,7 +45,7 @@ pub struct EvalArgs {
     /// N × N over each pixel as a sensor does (docs/nearfield-rendering.md, "Known limits").
     #[arg(long, default_value_t = 1)]
     pub capture_samples: u32,
-    /// View pixels across a luminaire's smallest feature (default: the contract's, 14 for a dot or a
+    /// View pixels across a luminaire's smallest feature (default: the contract's, 20 for a dot or a
     /// spot, 6 for a strip or a gap).
     #[arg(long)]
     pub feature_px: Option<f64>,
