@@ -80,7 +80,25 @@ fn check(rep: &LuminaireReport) {
     not_worse(Some(c.intensity_median), Some(n.intensity_median), "intensity median");
     not_worse(Some(c.intensity_max), Some(n.intensity_max), "intensity max");
     not_worse(Some(c.flux_error), Some(n.flux_error), "flux");
-    not_worse(Some(c.jump), Some(n.jump), "jump");
+    // Change 9: nearest's jump counts unless it draws under 1 % of the light the sweep looks at in
+    // every frame, none of it (a dark sweep, NaN, compares 0 with 0); continuous + proxy must draw it
+    // in each.
+    let (lo, hi) = c.sweep_light;
+    if !lo.is_nan() {
+        assert!(
+            lo >= 0.9 && hi <= 1.1,
+            "{name}: continuous+proxy draws {lo}…{hi} of the sweep's light"
+        );
+    }
+    if n.sweep_light.1.is_nan() || n.sweep_light.1 >= 0.01 {
+        not_worse(Some(c.jump), Some(n.jump), "jump");
+    } else {
+        eprintln!(
+            "{name}: nearest draws at most {:.4} % of the sweep's light; its jump {} is not compared",
+            100.0 * n.sweep_light.1,
+            n.jump
+        );
+    }
 }
 
 /// Evaluates `names` with captures of at most `max_capture_px` (the pitch rule decides below it).

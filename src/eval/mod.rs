@@ -192,6 +192,11 @@ pub struct ModeReport {
     pub flux_error: f64,
     /// Largest excess change per sweep step (render change − reference change), as a fraction.
     pub jump: f64,
+    /// The least and the most light the mode draws in a sweep frame, as fractions of the
+    /// reference's, over the pixels the jump sums (Σ R_k / Σ T_k; NaN for a dark sweep): a mode that
+    /// draws under 1 % of it in every frame has no jump to compare (docs/quality-metrics.md,
+    /// change 9).
+    pub sweep_light: (f64, f64),
     /// Index of the worst outside view (by log RMSE or, lacking it, silhouette).
     pub worst_view: Option<usize>,
 }
@@ -747,6 +752,7 @@ fn evaluate_loaded(
         // Sweep.
         let mut prev: Option<Vec<f32>> = None;
         let mut jump: f64 = 0.0;
+        let mut sweep_light = (f64::INFINITY, f64::NEG_INFINITY);
         for (k, v) in sweep.iter().enumerate() {
             let img = render_view(r, &mut targets, v)?;
             if let Some(a) = &prev {
@@ -756,8 +762,23 @@ fn evaluate_loaded(
                 let jr = metrics::relative_change(a, &img, &mask);
                 let jt = metrics::relative_change(t0, t1, &mask);
                 jump = jump.max(jr - jt);
+                let sum = |img: &[f32]| -> f64 {
+                    img.iter()
+                        .zip(&mask)
+                        .filter(|(_, m)| **m)
+                        .map(|(x, _)| f64::from(*x))
+                        .sum()
+                };
+                let truth = sum(t0);
+                if truth > 0.0 {
+                    let f = sum(a) / truth;
+                    sweep_light = (sweep_light.0.min(f), sweep_light.1.max(f));
+                }
             }
             prev = Some(img);
+        }
+        if !sweep_light.0.is_finite() {
+            sweep_light = (f64::NAN, f64::NAN);
         }
         reports.push(ModeReport {
             mode: mode.label().into(),
@@ -768,6 +789,7 @@ fn evaluate_loaded(
             intensity_max: errs.last().copied().unwrap_or(f64::NAN),
             flux_error: (phi_hat - phi_t).abs() / phi_t,
             jump,
+            sweep_light,
             worst_view,
         });
     }
@@ -828,7 +850,7 @@ fn fmt_opt(v: Option<f64>, scale: f64, digits: usize) -> String {
 pub fn format_table(reports: &[LuminaireReport]) -> String {
     let mut s = String::new();
     s.push_str(&format!(
-        "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7}\n",
+        "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7}\n",
         "luminaire",
         "mode",
         "logRMSE",
@@ -842,12 +864,13 @@ pub fn format_table(reports: &[LuminaireReport]) -> String {
         "I med%",
         "I max%",
         "flux%",
-        "jump%"
+        "jump%",
+        "swp lt%"
     ));
     for rep in reports {
         for m in &rep.modes {
             s.push_str(&format!(
-                "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8.2} {:>8} {:>8} {:>8} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>7.3}\n",
+                "{:<11} {:<17} {:>8} {:>8} {:>8} {:>8.2} {:>8} {:>8} {:>8} {:>8} {:>8.3} {:>8.3} {:>8.3} {:>7.3} {:>7.1}\n",
                 rep.name,
                 m.mode,
                 fmt_opt(m.outside.log_rmse, 1.0, 4),
@@ -862,6 +885,7 @@ pub fn format_table(reports: &[LuminaireReport]) -> String {
                 m.intensity_max * 100.0,
                 m.flux_error * 100.0,
                 m.jump * 100.0,
+                m.sweep_light.1 * 100.0,
             ));
         }
         s.push_str(&format!(
