@@ -7,7 +7,7 @@
 
 mod gpu_common;
 
-use lumiview::eval::{evaluate, format_table, EvalConfig, EvalMode, LuminaireReport, ModeReport};
+use lumiview::eval::{evaluate, format_table, verdict, EvalConfig, EvalMode, LuminaireReport};
 
 fn config(tag: &str, max_capture_px: u32) -> EvalConfig {
     EvalConfig {
@@ -28,77 +28,15 @@ fn config(tag: &str, max_capture_px: u32) -> EvalConfig {
     }
 }
 
-fn mode<'a>(rep: &'a LuminaireReport, label: &str) -> &'a ModeReport {
-    rep.modes.iter().find(|m| m.mode == label).unwrap()
-}
-
 /// The thresholds for continuous + proxy, and "better than nearest on every metric" (ties at
-/// the storage quantisation floor, 2⁻¹¹ relative, count as not worse).
+/// the storage quantisation floor, 2⁻¹¹ relative, count as not worse): the contract's verdict
+/// (`lumiview::eval::verdict`, which `lumiview eval` prints under each luminaire).
 fn check(rep: &LuminaireReport) {
-    let c = mode(rep, "continuous+proxy");
-    let n = mode(rep, "nearest");
-    let name = &rep.name;
-    for (set, what) in [
-        (&c.outside, "outside"),
-        (&c.inside, "inside"),
-        (&c.held_out, "held-out"),
-    ] {
-        // Most views must be measurable (see "Pixel sets" in the contract).
-        assert!(
-            set.views >= 2 * set.unmeasured && set.views > 0,
-            "{name} {what}: {} views measured, {} unmeasured",
-            set.views,
-            set.unmeasured
-        );
-        let l = set.log_rmse.unwrap_or_else(|| panic!("{name} {what}: log RMSE n/a"));
-        assert!(l < 0.01, "{name} {what}: log RMSE {l}");
-        let m = set.median_rel.unwrap_or_else(|| panic!("{name} {what}: median n/a"));
-        assert!(m < 0.02, "{name} {what}: median {m}");
+    let v = verdict(rep).unwrap_or_else(|| panic!("{}: no verdict", rep.name));
+    if !v.ties.is_empty() || !v.not_compared.is_empty() {
+        eprintln!("{}: ties {:?}; not compared {:?}", rep.name, v.ties, v.not_compared);
     }
-    assert!(c.flux_error < 0.01, "{name}: flux error {}", c.flux_error);
-    assert!(c.jump < 0.02, "{name}: jump {}", c.jump);
-    let floor = 2f64.powi(-11);
-    let not_worse = |a: Option<f64>, b: Option<f64>, what: &str| {
-        let a = a.unwrap_or_else(|| panic!("{name}: {what} n/a for continuous+proxy"));
-        // A nearest value of n/a (no interior left) counts as worse than any number.
-        if let Some(b) = b {
-            assert!(a <= b + floor, "{name}: {what}: continuous+proxy {a} vs nearest {b}");
-        }
-    };
-    not_worse(c.outside.log_rmse, n.outside.log_rmse, "outside log RMSE");
-    not_worse(c.outside.median_rel, n.outside.median_rel, "outside median");
-    not_worse(c.outside.p95_rel, n.outside.p95_rel, "outside p95");
-    not_worse(c.inside.log_rmse, n.inside.log_rmse, "inside log RMSE");
-    not_worse(c.inside.median_rel, n.inside.median_rel, "inside median");
-    not_worse(c.inside.doubled, n.inside.doubled, "inside doubled");
-    not_worse(c.held_out.log_rmse, n.held_out.log_rmse, "held-out log RMSE");
-    not_worse(
-        Some(c.outside.silhouette_px),
-        Some(n.outside.silhouette_px),
-        "silhouette",
-    );
-    not_worse(Some(c.intensity_median), Some(n.intensity_median), "intensity median");
-    not_worse(Some(c.intensity_max), Some(n.intensity_max), "intensity max");
-    not_worse(Some(c.flux_error), Some(n.flux_error), "flux");
-    // Change 9: nearest's jump counts unless it draws under 1 % of the light the sweep looks at in
-    // every frame, none of it (a dark sweep, NaN, compares 0 with 0); continuous + proxy must draw it
-    // in each.
-    let (lo, hi) = c.sweep_light;
-    if !lo.is_nan() {
-        assert!(
-            lo >= 0.9 && hi <= 1.1,
-            "{name}: continuous+proxy draws {lo}…{hi} of the sweep's light"
-        );
-    }
-    if n.sweep_light.1.is_nan() || n.sweep_light.1 >= 0.01 {
-        not_worse(Some(c.jump), Some(n.jump), "jump");
-    } else {
-        eprintln!(
-            "{name}: nearest draws at most {:.4} % of the sweep's light; its jump {} is not compared",
-            100.0 * n.sweep_light.1,
-            n.jump
-        );
-    }
+    assert!(v.failures.is_empty(), "{}: {}", rep.name, v.failures.join("; "));
 }
 
 /// Evaluates `names` with captures of at most `max_capture_px` (the pitch rule decides below it).
