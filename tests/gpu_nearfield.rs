@@ -353,19 +353,32 @@ fn streaming_under_a_quarter_budget_renders_the_resident_image() {
         _ => unreachable!(),
     };
     assert!(!small_lum.fully_resident);
-    // Six views of the whole luminaire, then close-ups of its corners from inside the capture sphere
-    // and from outside (their residency keeps only the cameras of the lines inside the frustum).
-    let mut views: Vec<(DVec3, DVec3, f64)> = (0..6)
-        .map(|i| {
-            let az = i as f64 * 1.1;
-            (DVec3::new(1.2 * az.cos(), 1.2 * az.sin(), -1.6), DVec3::ZERO, 12.0)
-        })
-        .collect();
-    views.push((DVec3::new(0.2, 0.15, -0.3), DVec3::new(0.06, 0.05, 0.0), 6.0));
-    views.push((DVec3::new(-0.3, 0.1, -0.35), DVec3::new(-0.05, 0.06, 0.0), 5.0));
-    views.push((DVec3::new(0.9, -0.7, -1.3), DVec3::new(0.05, -0.06, 0.0), 2.0));
+    // Close-ups of the panel's corners from inside the capture sphere and from outside first, while
+    // little is resident (their residency keeps only the cameras of the lines inside the frustum, and
+    // a camera it dropped wrongly would be missing), then six views of the whole luminaire.
+    let mut views: Vec<(DVec3, DVec3, f64)> = vec![
+        (DVec3::new(0.2, 0.15, -0.3), DVec3::new(0.06, 0.05, 0.0), 6.0),
+        (DVec3::new(-0.3, 0.1, -0.35), DVec3::new(-0.05, 0.06, 0.0), 5.0),
+        (DVec3::new(0.9, -0.7, -1.3), DVec3::new(0.05, -0.06, 0.0), 2.0),
+    ];
+    views.extend((0..6).map(|i| {
+        let az = i as f64 * 1.1;
+        (DVec3::new(1.2 * az.cos(), 1.2 * az.sin(), -1.6), DVec3::ZERO, 12.0)
+    }));
     for (eye, target, fov) in views {
         let (cam, k) = eye_camera_at(eye, target, 80, fov);
+        if fov < 10.0 {
+            let host = HostCamera::from_pinhole(&cam, &k, 0.01, 10.0);
+            let (e4, clip) = (host.eye_in(Mat4::IDENTITY), host.clip_from_world());
+            let kept = small_lum
+                .cameras_for_view(e4, Some(clip), SelectionMode::Continuous)
+                .len();
+            let ball = small_lum.cameras_for_view(e4, None, SelectionMode::Continuous).len();
+            // From inside the sphere the ball's lines spread over much of it; from outside over a cap.
+            let fewer = if eye.length() < 1.0 { 3 } else { 1 };
+            eprintln!("close-up at {eye}: {kept} of {ball} cameras");
+            assert!(fewer * kept < ball, "close-up at {eye}: {kept} of {ball} cameras kept");
+        }
         let a = r.add_instance(full, Mat4::IDENTITY).unwrap();
         let img_full = render(&mut r, &cam, &k);
         r.remove_instance(a).unwrap();

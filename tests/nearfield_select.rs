@@ -757,9 +757,11 @@ fn bad_input_is_an_error_naming_the_argument() {
 }
 
 /// The cells a view needs (`view_cells`, residency's input): with the view's frustum, a close-up
-/// keeps far fewer cells than the whole content ball, none outside that ball's set, and still every
-/// cell that a pixel's line through the content ball reaches (perspective from inside and outside the
-/// capture sphere, orthographic; a wide view keeps the ball's set).
+/// keeps far fewer cells than the whole content ball and still every cell that a pixel's line through
+/// the content ball reaches (perspective from inside and outside the capture sphere, orthographic; a
+/// wide view keeps the ball's set). This catches wrong planes, signs and frames; that the slack of
+/// two sample spacings suffices is argued in `view_cells` (a boundary line's cell is usually also
+/// marked from a sample inside, so a test could not tell a slightly short slack).
 #[test]
 fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
     use glam::{Mat4, Vec4};
@@ -822,11 +824,6 @@ fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
         let eye4 = host.eye_in(Mat4::IDENTITY);
         let all = view_cells(&sel, (c, r), rc, eye4, None);
         let kept = view_cells(&sel, (c, r), rc, eye4, Some(clip));
-        let all_set: std::collections::HashSet<usize> = all.iter().copied().collect();
-        assert!(
-            kept.iter().all(|k| all_set.contains(k)),
-            "frustum cells outside the ball's"
-        );
         if fewer > 1.0 {
             assert!(
                 kept.len() as f64 * fewer < all.len() as f64,

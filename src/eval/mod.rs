@@ -871,10 +871,13 @@ fn evaluate_loaded(
                         .map(|(x, _)| f64::from(*x))
                         .sum()
                 };
-                let truth = sum(t0);
-                if truth > 0.0 {
-                    let f = sum(a) / truth;
-                    sweep_light = (sweep_light.0.min(f), sweep_light.1.max(f));
+                // Both frames of the step (so the first and the last count too).
+                for (r, t) in [(a.as_slice(), t0), (img.as_slice(), t1)] {
+                    let truth = sum(t);
+                    if truth > 0.0 {
+                        let f = sum(r) / truth;
+                        sweep_light = (sweep_light.0.min(f), sweep_light.1.max(f));
+                    }
                 }
             }
             prev = Some(img);

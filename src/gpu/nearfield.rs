@@ -389,16 +389,27 @@ pub fn view_cells(
         let amp = (dist + r) / (r * cos_i);
         let n_r = ((beta * amp / step).ceil() as usize).clamp(1, 4096);
         let (bx, by) = orthonormal(axis);
-        // Directions: a sample's neighbours are at most step / amp away (radians).
-        let slack = (2.0 * step / amp).min(1.0).sin();
-        let in_view = |d: DVec3| planes.iter().all(|(n, _)| n.dot(d) >= -slack);
+        // A direction is in view where it is on the inner side of every side plane through the eye;
+        // a plane that misses the eye (a projection translated in clip x or y without w) is left
+        // out, which only keeps more.
+        let through_eye: Vec<DVec3> = planes
+            .iter()
+            .filter(|(n, w)| (n.dot(e) + w).abs() <= 1e-4)
+            .map(|(n, _)| *n)
+            .collect();
         for k in 0..=n_r {
             let a = beta * k as f64 / n_r as f64;
             let n_a = ((std::f64::consts::TAU * a.sin() * amp / step).ceil() as usize).clamp(1, 65_536);
+            // Directions: a sample's neighbours are at most this far away (radians; step / amp
+            // unless the counts were clamped), and a line within twice that of the frustum counts.
+            let spacing = (step / amp)
+                .max(beta / n_r as f64)
+                .max(std::f64::consts::TAU * a.sin() / n_a as f64);
+            let slack = (2.0 * spacing).min(1.0).sin();
             for m in 0..n_a {
                 let phi = std::f64::consts::TAU * m as f64 / n_a as f64;
                 let d = axis * a.cos() + (bx * phi.cos() + by * phi.sin()) * a.sin();
-                if !in_view(d) {
+                if !through_eye.iter().all(|n| n.dot(d) >= -slack) {
                     continue;
                 }
                 if let Some(q) = first_hit(e, d) {
