@@ -232,7 +232,15 @@ fn bounding_polygon_renders_what_the_box_renders() {
         .unwrap();
     // (eye, point looked at, field of view in degrees; None: the content, about 0.3 m across, framed).
     let o = DVec3::ZERO;
+    let lum = match r.luminaire(tight).unwrap() {
+        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
+        _ => panic!("not a near-field luminaire"),
+    };
+    // An eye inside the content ball's box but outside the ball (the box's corner), looking away
+    // from the luminaire: the box is drawn there, and no line it shows meets the ball in front.
+    let corner = lum.sphere.0 + DVec3::new(0.8, -0.8, 0.8) * lum.content_radius_m;
     let views = [
+        (corner, corner * 3.0 - lum.sphere.0 * 2.0, Some(60.0)),
         (DVec3::new(0.0, 0.05, -2.5), o, None),
         (DVec3::new(1.3, 0.5, -1.2), o, None),
         (DVec3::new(-0.9, 1.4, -0.6), o, None),
@@ -245,10 +253,6 @@ fn bounding_polygon_renders_what_the_box_renders() {
         // The luminaire at the frame's edge, partly outside it.
         (DVec3::new(1.0, -0.6, -1.4), DVec3::new(0.25, 0.2, 0.0), Some(14.0)),
     ];
-    let lum = match r.luminaire(tight).unwrap() {
-        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
-        _ => panic!("not a near-field luminaire"),
-    };
     let (mut lit_views, mut polygons, mut rasters) = (0, 0, 0);
     for (e, (eye, target, fov)) in views.iter().enumerate() {
         let fov = fov.unwrap_or(2.0 * (0.3 / eye.length()).atan().to_degrees());
@@ -266,7 +270,7 @@ fn bounding_polygon_renders_what_the_box_renders() {
                 };
                 rasters += usize::from(kind != PolygonKind::Hull);
                 // The far and grazing eyes draw their mode's polygon.
-                if e < 5 {
+                if (1..6).contains(&e) {
                     assert_eq!(kind, want, "eye {e}, {mode:?}");
                 }
             }
@@ -284,6 +288,10 @@ fn bounding_polygon_renders_what_the_box_renders() {
                 .filter(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]) > 0.0)
                 .count();
             lit_views += usize::from(lit > 500);
+            assert!(
+                e != 0 || lit == 0,
+                "{mode:?}: {lit} px lit looking away from the luminaire"
+            );
             // The lit pixels must be the same; values and depths may differ by fp32 rounding, as the
             // shader works on the line through a different point of it.
             let f = |b: &[u8]| -> Vec<f32> { bytemuck::cast_slice::<u8, f32>(b).to_vec() };
