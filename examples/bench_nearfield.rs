@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! bench_nearfield [--luminaire star-panel] [--cameras 2000] [--capture-px 256]
-//!                 [--size 640x360 ...] [--runs 11] [--work DIR]
+//!                 [--size 640x360 ...] [--runs 25] [--work DIR]
 //! ```
 //!
 //! A synthetic scan (`rigo` layout, N cameras per hemisphere, square captures) is packed (cached in
@@ -55,7 +55,7 @@ fn parse_args() -> Res<Args> {
         cameras: 2000,
         capture_px: 256,
         sizes: Vec::new(),
-        runs: 11,
+        runs: 25,
         work: std::env::temp_dir().join("lumiview-bench-nearfield"),
     };
     let mut it = std::env::args().skip(1);
