@@ -33,10 +33,9 @@ use lumiview::gpu::{
 use lumiview::nearfield::layout::Layout;
 use lumiview::nearfield::pack::{csr_bytes_for, write_pack, Pack, PackOptions};
 use lumiview::nearfield::proxy::triangles_of;
-use lumiview::nearfield::rayset::look_at_basis;
 use lumiview::nearfield::select::SelectionMode;
 use lumiview::nearfield::synth::{self, SynthOptions};
-use lumiview::nearfield::{Camera, Hemisphere, Intrinsics};
+use lumiview::nearfield::{Camera, Intrinsics};
 
 type Res<T> = std::result::Result<T, Box<dyn Error>>;
 
@@ -301,19 +300,9 @@ fn run(a: &Args) -> Res<serde_json::Value> {
         // Eye 1.6 m away at γ = 35°, the bounding sphere framed by the frame's height.
         let g = 35f64.to_radians();
         let eye = centre + DVec3::new(g.sin() * 0.6, g.sin() * 0.8, -g.cos()) * 1.6;
-        let (right, down, forward) = look_at_basis(centre - eye);
         let d = (centre - eye).length();
         let f = 0.5 * f64::from(h) / (rb / d).asin().tan();
-        let cam = Camera {
-            position_m: eye,
-            right,
-            down,
-            forward,
-            intrinsics: None,
-            hemisphere: Hemisphere::Lower,
-            meta: Default::default(),
-            label: "bench".into(),
-        };
+        let cam = Camera::looking_at(eye, centre, "bench");
         let k = Intrinsics {
             width: w,
             height: h,

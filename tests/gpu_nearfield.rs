@@ -18,7 +18,7 @@ use lumiview::nearfield::proxy::triangles_of;
 use lumiview::nearfield::rayset::look_at_basis;
 use lumiview::nearfield::select::SelectionMode;
 use lumiview::nearfield::synth::{self, render_pinhole, SynthOptions};
-use lumiview::nearfield::{Camera, Hemisphere, Intrinsics};
+use lumiview::nearfield::{Camera, Intrinsics};
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("lumiview-gpu-nearfield-{}", std::process::id()));
@@ -49,17 +49,7 @@ fn eye_camera(eye: DVec3, size: u32, fov_deg: f64) -> (Camera, Intrinsics) {
 }
 
 fn eye_camera_at(eye: DVec3, target: DVec3, size: u32, fov_deg: f64) -> (Camera, Intrinsics) {
-    let (right, down, forward) = look_at_basis(target - eye);
-    let cam = Camera {
-        position_m: eye,
-        right,
-        down,
-        forward,
-        intrinsics: None,
-        hemisphere: Hemisphere::Lower,
-        meta: Default::default(),
-        label: "eye".into(),
-    };
+    let cam = Camera::looking_at(eye, target, "eye");
     let f = 0.5 * f64::from(size) / (0.5 * fov_deg.to_radians()).tan();
     let k = Intrinsics {
         width: size,

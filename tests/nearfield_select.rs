@@ -767,7 +767,6 @@ fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
     use glam::{Mat4, Vec4};
     use lumiview::gpu::camera::HostCamera;
     use lumiview::gpu::nearfield::view_cells;
-    use lumiview::nearfield::rayset::look_at_basis;
     let set = layout_set(
         Layout::Rigo {
             per_hemisphere: 2000,
@@ -798,17 +797,7 @@ fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
     ];
     for (eye, target, fov, fewer) in views {
         let host = if fov > 0.0 {
-            let (right, down, forward) = look_at_basis(target - eye);
-            let cam = Camera {
-                position_m: eye,
-                right,
-                down,
-                forward,
-                intrinsics: None,
-                hemisphere: Hemisphere::Lower,
-                meta: Default::default(),
-                label: "eye".into(),
-            };
+            let cam = Camera::looking_at(eye, target, "eye");
             let f = 100.0 / (0.5 * f64::to_radians(fov)).tan();
             let k = Intrinsics {
                 width: 300,

@@ -17,10 +17,9 @@ use crate::gpu::{GpuError, HostCamera, RenderOptions, RenderTarget, Renderer, Ta
 use crate::nearfield::layout::Layout;
 use crate::nearfield::pack::{write_pack, Pack, PackOptions};
 use crate::nearfield::proxy::triangles_of;
-use crate::nearfield::rayset::look_at_basis;
 use crate::nearfield::select::SelectionMode;
 use crate::nearfield::synth::{self, render_ortho, render_pinhole, Luminaire, OrthoView, SynthOptions, SynthSource};
-use crate::nearfield::{Camera, Hemisphere, Intrinsics, RayImageSet, Scan};
+use crate::nearfield::{Camera, Intrinsics, RayImageSet, Scan};
 
 pub use metrics::{aggregate, compare_view, compare_view_with_margin, SetMetrics, ViewMetrics};
 
@@ -382,21 +381,11 @@ fn direction(gamma_deg: f64, c_deg: f64) -> DVec3 {
 pub fn framed_view(eye: DVec3, target: DVec3, rb: f64, pitch_m: f64, max_px: u32) -> View {
     let to = target - eye;
     let d = to.length();
-    let (right, down, forward) = look_at_basis(to);
     let f = d / pitch_m;
     let half_angle = (rb / d).min(0.999).asin();
     let size = ((2.0 * f * half_angle.tan() / 0.9).ceil() as u32).clamp(8, max_px.max(8));
     View {
-        camera: Camera {
-            position_m: eye,
-            right,
-            down,
-            forward,
-            intrinsics: None,
-            hemisphere: Hemisphere::Lower,
-            meta: Default::default(),
-            label: "view".into(),
-        },
+        camera: Camera::looking_at(eye, target, "view"),
         intrinsics: Intrinsics {
             width: size,
             height: size,

@@ -155,6 +155,22 @@ impl Camera {
         }
     }
 
+    /// A camera at `eye_m` looking at `target_m` (luminaire frame, m), oriented by
+    /// [`look_at_basis`], without intrinsics (a view, not a capture: the hemisphere is nominal).
+    pub fn looking_at(eye_m: DVec3, target_m: DVec3, label: &str) -> Self {
+        let (right, down, forward) = look_at_basis(target_m - eye_m);
+        Self {
+            position_m: eye_m,
+            right,
+            down,
+            forward,
+            intrinsics: None,
+            hemisphere: Hemisphere::Lower,
+            meta: ImageMeta::default(),
+            label: label.into(),
+        }
+    }
+
     /// World (luminaire-frame) direction of a camera-space direction.
     pub fn to_world(&self, d_camera: DVec3) -> DVec3 {
         self.right * d_camera.x + self.down * d_camera.y + self.forward * d_camera.z
