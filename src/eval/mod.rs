@@ -861,10 +861,10 @@ fn evaluate_loaded(
                         .sum()
                 };
                 // Both frames of the step (so the first and the last count too).
-                for (r, t) in [(a.as_slice(), t0), (img.as_slice(), t1)] {
-                    let truth = sum(t);
+                for (frame, reference) in [(a.as_slice(), t0), (img.as_slice(), t1)] {
+                    let truth = sum(reference);
                     if truth > 0.0 {
-                        let f = sum(r) / truth;
+                        let f = sum(frame) / truth;
                         sweep_light = (sweep_light.0.min(f), sweep_light.1.max(f));
                     }
                 }
