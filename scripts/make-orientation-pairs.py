@@ -12,10 +12,19 @@ symmetric as the pair's symmetry requires, at the same grid nodes:
   quadrant  IES horizontal 0..90                     LDT Isym 4 (C0..C90 stored)
   rotational IES one horizontal angle                LDT Isym 1
 
+The pairs' luminous openings are the same rectangle too: 0.6 m along X (C0-C180) and 0.3 m along Y
+(C90-C270). IES puts its length along X, EULUMDAT its length along Y (docs/adr/0002), so the IES
+file says width 0.3, length 0.6 and the EULUMDAT file length 300 mm, width 600 mm.
+
 plus `rotated90.ies`: the `full` luminaire turned 90 degrees counter-clockwise about the vertical
 axis (its C0 plane now at C90), and `luxcore_ASA_15M_R2.ldt`: the real IES file
 tests/data/misc/luxcore_ASA_15M_R2.ies converted by hand to EULUMDAT (cd -> cd/klm with its
 13000 lm lamp, Isym 2).
+
+It also writes tests/data/fixtures/side_lit.ldt, the asymmetric side-lit luminaire of the
+orientation tests and goldens: EULUMDAT Isym 0, luminous area 600 mm long (Y) x 150 mm wide (X)
+with side heights C0 60, C90 30, C180 0, C270 15 mm, housing 620 x 170 x 80 mm, and an intensity
+that differs on every side (`side_lit`).
 
 Run from the repository root: python3 scripts/make-orientation-pairs.py
 """
@@ -103,8 +112,8 @@ def ldt_planes(isym, mc):
     return list(range(mc // 4 + 1))
 
 
-def write_ldt(path, title, isym, c_angles, gammas, cd_func, lamp_flux, length_mm=600, width_mm=300,
-              lor=100.0, comma=False):
+def write_ldt(path, title, isym, c_angles, gammas, cd_func, lamp_flux, length_mm=300, width_mm=600,
+              lor=100.0, comma=False, heights_mm=(0, 0, 0, 0), luminaire_mm=None):
     mc = len(c_angles)
     dc = c_angles[1] - c_angles[0] if mc > 1 else 0
     ng = len(gammas)
@@ -127,8 +136,8 @@ def write_ldt(path, title, isym, c_angles, gammas, cd_func, lamp_flux, length_mm
         "PAIR-1",
         os.path.basename(path),
         "2026-11-22 lumiview",
-        str(length_mm), str(width_mm), "50",
-        str(length_mm), str(width_mm), "0", "0", "0", "0",
+        *[str(v) for v in (luminaire_mm or (length_mm, width_mm, 50))],
+        str(length_mm), str(width_mm), *[str(h) for h in heights_mm],
         num(100.0), num(lor), num(1.0), num(0.0),
         "1",
         "1", "Test lamp", num(lamp_flux), "3000K", "80", num(50.0),
@@ -184,6 +193,19 @@ def main():
 
     write_ldt(f"{OUT}/luxcore_ASA_15M_R2.ldt", "ASA 15M R2 (converted from IES)", 2, c_angles, v, cd,
               lamp_lm, length_mm=378, width_mm=378, lor=73.5)
+    # The side-lit luminaire: brightest towards C0, then C90, C270, C180 near the horizontal.
+    gammas = [i * 5.0 for i in range(19)]
+    write_ldt("tests/data/fixtures/side_lit.ldt", "side-lit test luminaire", 0,
+              [i * DC for i in range(24)], gammas, side_lit, 1000.0, length_mm=600, width_mm=150,
+              lor=90.0, heights_mm=(60, 30, 0, 15), luminaire_mm=(620, 170, 80))
+
+
+def side_lit(c_deg, g_deg):
+    """cd: a downlight plus side light that differs by azimuth (C0 > C90 > C270 > C180)."""
+    c = math.radians(c_deg)
+    g = math.radians(g_deg)
+    side = 1.0 + 0.6 * math.cos(c) + 0.25 * math.sin(c)
+    return 300.0 * math.cos(g) + 80.0 * math.sin(g) * side
 
 
 if __name__ == "__main__":

@@ -38,7 +38,7 @@ fn info_json_has_the_summary_fields() {
     assert!((flux - 9560.83).abs() < 1.0, "{flux}");
     assert!(v["max_intensity_cd"].as_f64().unwrap() > 5000.0);
     assert_eq!(v["opening"]["shape"], "Rectangle");
-    assert!((v["opening"]["length_m"].as_f64().unwrap() - 1.24 * 0.3048).abs() < 1e-9);
+    assert!((v["opening"]["size_x_m"].as_f64().unwrap() - 1.24 * 0.3048).abs() < 1e-9);
     assert!(v["labels"].as_array().unwrap().iter().any(|l| l["key"] == "MANUFAC"));
     // The text form carries the same facts.
     let text = String::from_utf8(lumiview(&["info", ASA]).stdout).unwrap();

@@ -1,6 +1,7 @@
 //! Golden images of the far-field pass made on lavapipe (small RGBA8 tone-mapped renders): from
 //! outside, from below, at a grazing angle, with the photometric-solid overlay, and an EULUMDAT
-//! disc with luminous sides and its housing box. Each view also checks a number: the tone-mapped
+//! disc with luminous sides and its housing box, and an asymmetric side-lit EULUMDAT luminaire with
+//! its housing from C0, C90, C180 and C270. Each view also checks a number: the tone-mapped
 //! value of the pixel at the opening's centre equals Reinhard(L(C, γ) · exposure) for the direction
 //! from the centre to the eye.
 //!
@@ -208,4 +209,45 @@ fn eulumdat_disc_with_sides_and_housing() {
         },
         2e-4,
     );
+}
+
+/// The asymmetric side-lit EULUMDAT luminaire (tests/data/fixtures/side_lit.ldt: 600 mm long along
+/// Y, 150 mm wide along X, side faces C0 60, C90 30, C180 0, C270 15 mm, housing 620 × 170 × 80 mm)
+/// from C0, C90, C180 and C270 at γ 70°, with its housing: each view shows the face its C plane
+/// names (docs/adr/0002), drawn by the far-field pass.
+fn side_lit(c: f64) {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let p = Arc::new(photometry::load(&data("fixtures/side_lit.ldt"), &LoadOptions::default()).unwrap());
+    check(
+        &format!("side_lit_c{c}"),
+        p,
+        c,
+        70.0,
+        1.6,
+        Overlays {
+            solid: false,
+            housing: true,
+        },
+        2e-4,
+    );
+}
+
+#[test]
+fn side_lit_from_c0() {
+    side_lit(0.0);
+}
+
+#[test]
+fn side_lit_from_c90() {
+    side_lit(90.0);
+}
+
+#[test]
+fn side_lit_from_c180() {
+    side_lit(180.0);
+}
+
+#[test]
+fn side_lit_from_c270() {
+    side_lit(270.0);
 }

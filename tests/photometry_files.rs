@@ -183,8 +183,8 @@ fn photometric_viewer_ies_openings() {
         let ph = open(&format!("photometric-viewer/ies95/{file}"));
         let o = ph.opening;
         assert_eq!(o.shape, shape, "{file}");
-        assert_close(o.length_m, l, 1e-12, file);
-        assert_close(o.width_m, w, 1e-12, file);
+        assert_close(o.size_x_m, l, 1e-12, file);
+        assert_close(o.size_y_m, w, 1e-12, file);
         assert_close(o.height_m, h, 1e-12, file);
     }
     // Luminance = I / A_proj: a 0.34 m × 0.12 m flat rectangle seen from below and at 60°.
@@ -306,21 +306,23 @@ fn eulumdat_lamp_sets_and_relative_scaling() {
 fn eulumdat_luminous_areas() {
     let o = |f: &str| open(&format!("photometric-viewer/ldt/{f}")).opening;
     let r = o("rectangular_luminaire_rectangular_luminous_opening.ldt");
-    assert_eq!((r.shape, r.length_m, r.width_m), (OpeningShape::Rectangle, 0.05, 0.04));
+    // EULUMDAT: length 50 mm along Y (C90–C270), width 40 mm along X (docs/adr/0002).
+    assert_eq!((r.shape, r.size_x_m, r.size_y_m), (OpeningShape::Rectangle, 0.04, 0.05));
     let rh = o("rectangular_luminaire_rectangular_luminous_opening_with_heights.ldt");
     assert_eq!(rh.shape, OpeningShape::RectangleWithSides);
     assert_eq!(rh.side_heights_m, [0.011, 0.012, 0.013, 0.014]);
-    // Seen from C0 at γ = 90°: only the C0 side face (width 0.04 m × 0.011 m) shows.
-    assert_close(rh.projected_area(0.0, 90.0), 0.04 * 0.011, 1e-9, "C0 side");
-    assert_close(rh.projected_area(270.0, 90.0), 0.05 * 0.014, 1e-9, "C270 side");
+    // Seen from C0 at γ = 90°: only the C0 side face shows, spanning the length (0.05 m) × 0.011 m.
+    assert_close(rh.projected_area(0.0, 90.0), 0.05 * 0.011, 1e-9, "C0 side");
+    assert_close(rh.projected_area(270.0, 90.0), 0.04 * 0.014, 1e-9, "C270 side");
     let d = o("round_luminaire_round_luminous_opening.ldt");
-    assert_eq!((d.shape, d.length_m, d.width_m), (OpeningShape::Ellipse, 0.05, 0.05));
+    assert_eq!((d.shape, d.size_x_m, d.size_y_m), (OpeningShape::Ellipse, 0.05, 0.05));
     assert_close(d.projected_area(0.0, 0.0), PI * 0.025 * 0.025, 1e-12, "disc");
     let dh = o("rectangular_luminaire_round_luminous_opening_with_heights.ldt");
     assert_eq!(dh.shape, OpeningShape::DiscWithSides);
     assert!(open("photometric-viewer/ldt/absolute.ldt").opening.is_point());
     let size = open("photometric-viewer/ldt/rectangular_luminaire_rectangular_luminous_opening.ldt").luminaire_size_m;
-    assert_eq!(size, Some([0.12, 0.06, 0.03]));
+    // Luminaire 120 mm long (Y) × 60 mm wide (X) × 30 mm high.
+    assert_eq!(size, Some([0.06, 0.12, 0.03]));
 }
 
 #[test]
@@ -370,6 +372,11 @@ fn ies_and_eulumdat_of_the_same_luminaire_agree() {
     for kind in ["full", "c0c180", "c90c270", "quadrant", "rotational"] {
         let ies = open(&format!("pairs/{kind}.ies"));
         let ldt = open(&format!("pairs/{kind}.ldt"));
+        // The same 0.6 m (X) × 0.3 m (Y) opening: IES width 0.3 / length 0.6, EULUMDAT length 300
+        // / width 600 mm (the formats put their length on different axes, docs/adr/0002).
+        let (oi, ol) = (ies.opening, ldt.opening);
+        assert_eq!((oi.size_x_m, oi.size_y_m), (0.6, 0.3), "{kind} IES opening");
+        assert_eq!((ol.size_x_m, ol.size_y_m), (0.6, 0.3), "{kind} LDT opening");
         for (c, g) in sphere_samples() {
             let (a, b) = (ies.intensity(c, g), ldt.intensity(c, g));
             assert!(
@@ -494,7 +501,7 @@ fn lm63_1986_without_version_line() {
     assert_eq!(ph.intensity(0.0, 45.0), 300.0);
     assert_eq!(ph.lamp_flux_lm, Some(1500.0));
     assert_eq!(ph.opening.shape, OpeningShape::Rectangle);
-    assert_close(ph.opening.length_m, 0.5 * 0.3048, 1e-12, "feet");
+    assert_close(ph.opening.size_x_m, 0.5 * 0.3048, 1e-12, "feet");
 }
 
 #[test]

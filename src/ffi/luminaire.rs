@@ -60,7 +60,7 @@ impl TryFrom<u32> for SelectionArg {
 
 /// Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 pub const LUMI_OPENING_POINT: u32 = 0;
-/// Flat rectangle length × width.
+/// Flat rectangle (extents X × Y).
 pub const LUMI_OPENING_RECTANGLE: u32 = 1;
 /// Box with luminous sides.
 pub const LUMI_OPENING_BOX: u32 = 2;
@@ -70,9 +70,9 @@ pub const LUMI_OPENING_ELLIPSE: u32 = 3;
 pub const LUMI_OPENING_VERTICAL_CYLINDER: u32 = 4;
 /// Ellipsoid / sphere.
 pub const LUMI_OPENING_ELLIPSOID: u32 = 5;
-/// Horizontal cylinder along the length (X).
+/// Horizontal cylinder along X (the C0–C180 axis; an IES file's length).
 pub const LUMI_OPENING_HORIZONTAL_CYLINDER_X: u32 = 6;
-/// Horizontal cylinder along the width (Y).
+/// Horizontal cylinder along Y (the C90–C270 axis; an IES file's width).
 pub const LUMI_OPENING_HORIZONTAL_CYLINDER_Y: u32 = 7;
 /// Vertical ellipse facing C0.
 pub const LUMI_OPENING_VERTICAL_ELLIPSE_C0: u32 = 8;
@@ -101,9 +101,11 @@ pub struct lumi_luminaire_info {
     pub flux_lm: f64,
     /// One of `LUMI_OPENING_*`.
     pub opening_shape: u32,
-    /// Opening extents along X (length), Y (width), Z (height), metres.
+    /// Opening extents along X (C0–C180), Y (C90–C270) and Z, metres. An IES file's length is X,
+    /// its width Y; an EULUMDAT file's width is X, its length Y (docs/conventions.md).
     pub opening_size_m: [f64; 3],
-    /// Housing size (length, width, height) in metres; all 0 when the file gives none.
+    /// Housing extents along X, Y and Z in metres (EULUMDAT luminaire dimensions: width along X,
+    /// length along Y); all 0 when the file gives none.
     pub housing_size_m: [f64; 3],
     /// Near-field: capture cameras (images) in the scan.
     pub camera_count: u32,
@@ -513,7 +515,7 @@ pub unsafe extern "C" fn lumi_luminaire_get_info(
                     info.max_gamma_deg = mg;
                     info.flux_lm = p.flux_lm();
                     info.opening_shape = shape_code(o.shape);
-                    info.opening_size_m = [o.length_m, o.width_m, o.height_m];
+                    info.opening_size_m = [o.size_x_m, o.size_y_m, o.height_m];
                     info.housing_size_m = p.luminaire_size_m.unwrap_or([0.0; 3]);
                 }
                 Luminaire::Nearfield(n) => {

@@ -35,7 +35,7 @@ fn ell(a: f32, b: f32, t: f32) -> (f32, f32) {
 /// Triangles of a luminous opening; empty for a point opening. Flat shapes are single-sided
 /// geometry drawn without culling (they emit to both sides, as A_proj counts them).
 pub fn opening_triangles(o: &LuminousOpening) -> Triangles {
-    let (l, w, h) = (o.length_m as f32, o.width_m as f32, o.height_m as f32);
+    let (l, w, h) = (o.size_x_m as f32, o.size_y_m as f32, o.height_m as f32);
     let (hl, hw, hh) = (l / 2.0, w / 2.0, h / 2.0);
     let mut t = Triangles::default();
     let n = SEGMENTS;
@@ -164,8 +164,8 @@ fn box_faces(t: &mut Triangles, lo: [f32; 3], hi: [f32; 3]) {
     t.quad(c(1, 0, 0), c(1, 0, 1), c(1, 1, 1), c(1, 1, 0));
 }
 
-/// Line list (pairs of positions) of the housing box `size_m` = (length along X, width along Y,
-/// height along Z), hanging from the photometric centre's plane: z from 0 up to the height (the
+/// Line list (pairs of positions) of the housing box `size_m` = (extents along X, Y and Z;
+/// `Photometry::luminaire_size_m`), hanging from the photometric centre's plane: z from 0 up to the height (the
 /// luminous opening is at the bottom of the housing).
 pub fn housing_lines(size_m: [f64; 3]) -> Vec<[f32; 3]> {
     let (hl, hw, h) = ((size_m[0] / 2.0) as f32, (size_m[1] / 2.0) as f32, size_m[2] as f32);

@@ -96,7 +96,8 @@ pub struct Photometry {
     pub input_watts: Option<f64>,
     /// The luminous opening in metres.
     pub opening: LuminousOpening,
-    /// Luminaire housing size (length, width, height) in m, where the file gives it.
+    /// Luminaire housing extents along X, Y and Z in m, where the file gives them (EULUMDAT: X is
+    /// its width, Y its length; docs/adr/0002).
     pub luminaire_size_m: Option<[f64; 3]>,
     /// TILT table, when the file has one.
     pub tilt: Option<TiltTable>,
@@ -104,7 +105,8 @@ pub struct Photometry {
     pub tilt_applied_deg: Option<f64>,
     /// Absolute intensity in cd over the sphere.
     pub web: PhotometricWeb,
-    /// Non-fatal findings.
+    /// Non-fatal findings, each beginning with the file's name: what the reader had to guess,
+    /// and files that parse but are implausible (`summary::plausibility_warnings`).
     pub warnings: Vec<String>,
     /// The file as read.
     pub raw: RawFile,
@@ -319,7 +321,7 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         .map(|l| (String::new(), l.clone()))
         .chain(f.keywords.iter().cloned())
         .collect();
-    Ok(Photometry {
+    Ok(finish(Photometry {
         source: name.to_string(),
         format: FileFormat::Ies(f.version),
         labels,
@@ -340,7 +342,7 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         web,
         warnings,
         raw: RawFile::Ies(Box::new(f)),
-    })
+    }))
 }
 
 fn apply_tilt(
@@ -511,43 +513,30 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         )
         .into());
     }
+    // EULUMDAT's length runs along C90–C270 (Y) and its width along C0–C180 (X); the C0 side
+    // height is the face seen from C0, spanning the length (docs/adr/0002).
     let [la, ba] = f.luminous_area_mm;
     let heights = f.luminous_heights_mm.map(m);
     let has_sides = heights.iter().any(|h| *h > 0.0);
+    let tallest = heights.iter().copied().fold(0.0, f64::max);
     let opening = if la == 0.0 && ba == 0.0 {
         if has_sides {
             warnings.push("luminous area has side heights but no length or width: read as a point".into());
         }
         LuminousOpening::point()
-    } else if ba == 0.0 {
-        let mut o = LuminousOpening::new(
-            if has_sides {
-                OpeningShape::DiscWithSides
-            } else {
-                OpeningShape::Ellipse
-            },
-            m(la),
-            m(la),
-            heights.iter().copied().fold(0.0, f64::max),
-        );
-        o.side_heights_m = heights;
-        o
     } else {
-        let mut o = LuminousOpening::new(
-            if has_sides {
-                OpeningShape::RectangleWithSides
-            } else {
-                OpeningShape::Rectangle
-            },
-            m(la),
-            m(ba),
-            heights.iter().copied().fold(0.0, f64::max),
-        );
+        let (shape, x, y) = match (ba == 0.0, has_sides) {
+            (true, true) => (OpeningShape::DiscWithSides, la, la),
+            (true, false) => (OpeningShape::Ellipse, la, la),
+            (false, true) => (OpeningShape::RectangleWithSides, ba, la),
+            (false, false) => (OpeningShape::Rectangle, ba, la),
+        };
+        let mut o = LuminousOpening::new(shape, m(x), m(y), tallest);
         o.side_heights_m = heights;
         o
     };
     let [ll, lw, lh] = f.luminaire_mm;
-    let luminaire_size_m = (ll > 0.0).then(|| [m(ll), m(if lw > 0.0 { lw } else { ll }), m(lh)]);
+    let luminaire_size_m = (ll > 0.0).then(|| [m(if lw > 0.0 { lw } else { ll }), m(ll), m(lh)]);
     let labels = vec![
         ("company".to_string(), f.company.clone()),
         ("luminaire name".to_string(), f.luminaire_name.clone()),
@@ -558,7 +547,7 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         ("lamp type".to_string(), set.lamp_type.clone()),
     ];
     let lor = f.lor_percent / 100.0;
-    Ok(Photometry {
+    Ok(finish(Photometry {
         source: name.to_string(),
         format: FileFormat::Eulumdat,
         labels,
@@ -579,7 +568,21 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         web,
         warnings,
         raw: RawFile::Ldt(Box::new(f)),
-    })
+    }))
+}
+
+/// Names the file in every reader warning and adds the plausibility checks that need the whole
+/// model (light output ratio, declared against integrated flux).
+fn finish(mut p: Photometry) -> Photometry {
+    let prefix = format!("{}: ", p.source);
+    for w in &mut p.warnings {
+        if !w.starts_with(&prefix) {
+            *w = format!("{prefix}{w}");
+        }
+    }
+    let extra = super::summary::plausibility_warnings(&p);
+    p.warnings.extend(extra);
+    p
 }
 
 #[cfg(test)]

@@ -24,10 +24,12 @@ pub mod lut;
 pub mod opening;
 pub mod plot;
 pub mod solid;
+pub mod summary;
 pub mod text;
 pub mod web;
 
 pub use error::{ParseError, PhotometryError};
 pub use luminaire::{load, load_from_text, FileFormat, LoadOptions, Photometry};
 pub use opening::{LuminousOpening, OpeningShape};
+pub use summary::{Peak, Summary};
 pub use web::{PhotometricType, PhotometricWeb, Symmetry};

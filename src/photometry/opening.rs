@@ -1,7 +1,13 @@
 //! Luminous openings: the emitting surface a photometric file declares, in metres in the
-//! luminaire frame (length along X = C0, width along Y = C90, height along Z), its projected area
+//! luminaire frame (extents along X = C0–C180, Y = C90–C270 and Z), its projected area
 //! A_proj(C, γ) seen from a direction, and the luminance L = I / A_proj. The formula for every
 //! shape is written out in docs/photometry.md.
+//!
+//! The opening is stored by axis, never by a format's own words: which of a file's "length" and
+//! "width" lies along X is the format's rule (docs/adr/0002-luminous-dimensions-per-format.md).
+//! IES LM-63 measures its length along the 0–180° plane (X) and its width along the 90–270° plane
+//! (Y); EULUMDAT, as Relux reads it, runs the length along C90–C270 (Y), and its C0 side height
+//! is the face seen from C0 (normal +X), which spans that length.
 
 use std::f64::consts::PI;
 
@@ -12,28 +18,29 @@ use super::web::direction;
 pub enum OpeningShape {
     /// No extent (IES 0, 0, 0): luminance is undefined.
     Point,
-    /// Flat horizontal rectangle, length × width.
+    /// Flat horizontal rectangle, X × Y.
     Rectangle,
     /// Rectangle with luminous sides of one height (IES w, l, h > 0): a box.
     Box,
     /// Flat horizontal ellipse (a disc when length = width).
     Ellipse,
-    /// Vertical cylinder with elliptic (or circular) cross-section length × width, height h.
+    /// Vertical cylinder with elliptic (or circular) cross-section X × Y, height h.
     VerticalCylinder,
-    /// Ellipsoid with axes length, width, height (a sphere when all are equal).
+    /// Ellipsoid with axes X, Y, height (a sphere when all are equal).
     Ellipsoid,
-    /// Horizontal cylinder along the length (X); cross-section width × height.
+    /// Horizontal cylinder along X (IES: along the length); cross-section Y × height.
     HorizontalCylinderAlongLength,
-    /// Horizontal cylinder along the width (Y); cross-section length × height.
+    /// Horizontal cylinder along Y (IES: along the width); cross-section X × height.
     HorizontalCylinderAlongWidth,
-    /// Flat vertical ellipse facing C0 (normal ±X), width × height.
+    /// Flat vertical ellipse facing C0 (normal ±X), Y × height.
     VerticalEllipseFacingC0,
-    /// Flat vertical ellipse facing C90 (normal ±Y), length × height.
+    /// Flat vertical ellipse facing C90 (normal ±Y), X × height.
     VerticalEllipseFacingC90,
-    /// EULUMDAT luminous area: a rectangle (length × width) with its own side heights at
-    /// C0, C90, C180 and C270.
+    /// EULUMDAT luminous area: a rectangle (X × Y) with its own side heights on the faces seen
+    /// from C0, C90, C180 and C270.
     RectangleWithSides,
-    /// EULUMDAT luminous area: a disc (diameter = length) with side heights at C0, C90, C180, C270.
+    /// EULUMDAT luminous area: a disc (diameter = X = Y) with side heights on the quarters seen
+    /// from C0, C90, C180, C270.
     DiscWithSides,
 }
 
@@ -42,13 +49,16 @@ pub enum OpeningShape {
 pub struct LuminousOpening {
     /// Its shape.
     pub shape: OpeningShape,
-    /// Extent along X (C0–C180), m. Diameter for discs.
-    pub length_m: f64,
-    /// Extent along Y (C90–C270), m.
-    pub width_m: f64,
+    /// Extent along X (the C0–C180 axis), m. Diameter for discs. IES: the length; EULUMDAT: the
+    /// width (docs/adr/0002-luminous-dimensions-per-format.md).
+    pub size_x_m: f64,
+    /// Extent along Y (the C90–C270 axis), m. IES: the width; EULUMDAT: the length.
+    pub size_y_m: f64,
     /// Extent along Z, m.
     pub height_m: f64,
-    /// Side heights at C0, C90, C180, C270 in m (EULUMDAT shapes only; zero otherwise).
+    /// Heights in m of the side faces seen from C0, C90, C180 and C270, i.e. of the faces whose
+    /// outward normals are +X, +Y, −X and −Y (EULUMDAT shapes only; zero otherwise). The C0 face
+    /// spans the Y extent, the C90 face the X extent.
     pub side_heights_m: [f64; 4],
 }
 
@@ -57,19 +67,19 @@ impl LuminousOpening {
     pub fn point() -> Self {
         LuminousOpening {
             shape: OpeningShape::Point,
-            length_m: 0.0,
-            width_m: 0.0,
+            size_x_m: 0.0,
+            size_y_m: 0.0,
             height_m: 0.0,
             side_heights_m: [0.0; 4],
         }
     }
 
-    /// An opening of `shape` with its extents in metres.
-    pub fn new(shape: OpeningShape, length_m: f64, width_m: f64, height_m: f64) -> Self {
+    /// An opening of `shape` with its extents along X, Y and Z in metres.
+    pub fn new(shape: OpeningShape, size_x_m: f64, size_y_m: f64, height_m: f64) -> Self {
         LuminousOpening {
             shape,
-            length_m,
-            width_m,
+            size_x_m,
+            size_y_m,
             height_m,
             side_heights_m: [0.0; 4],
         }
@@ -78,7 +88,7 @@ impl LuminousOpening {
     /// Projected area in m² of the opening seen from the unit direction `d` (luminaire frame,
     /// pointing from the luminaire towards the observer). Flat surfaces count from both sides.
     pub fn projected_area_dir(&self, d: [f64; 3]) -> f64 {
-        let (l, w, h) = (self.length_m, self.width_m, self.height_m);
+        let (l, w, h) = (self.size_x_m, self.size_y_m, self.height_m);
         let (dx, dy, dz) = (d[0].abs(), d[1].abs(), d[2].abs());
         let q = PI / 4.0;
         match self.shape {
@@ -150,7 +160,8 @@ pub fn luminance(cd: f64, area_m2: f64) -> Option<f64> {
 }
 
 /// Classifies IES luminous dimensions (width, length, height, already in metres) into a shape,
-/// following the LM-63-2019 Table 1 sign conventions. `legacy` selects the pre-2002 reading: one
+/// following the LM-63-2019 Table 1 sign conventions. The length lies along X (the 0–180° plane),
+/// the width along Y (the 90–270° plane). `legacy` selects the pre-2002 reading: one
 /// negative horizontal dimension with the other positive is an ellipse (flat, or with luminous
 /// sides when the height is positive) or, with a negative height, an ellipsoid; and a zero length
 /// or width takes the value of the negative (round) dimension next to it. Returns the opening and

@@ -23,19 +23,22 @@ pub struct LoadArgs {
     /// orientation, no factor).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub tilt: Option<f64>,
-    /// EULUMDAT lamp set to use, 1-based (sets are alternative equipment).
-    #[arg(long, value_name = "N", default_value_t = 1)]
-    pub lamp_set: usize,
+    /// EULUMDAT lamp set to use, 1-based (sets are alternative equipment; default 1).
+    #[arg(long, value_name = "N")]
+    pub lamp_set: Option<usize>,
 }
 
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Summarise a photometric file: format, labels, type, symmetry, grid, lamps, maximum
-    /// intensity (cd), integrated flux (lm), luminous opening (m).
+    /// intensity (cd) where the file stores it, flux (lm), beam and field angles, zonal lumens,
+    /// DLOR/ULOR, CIE flux code, luminous opening (m), warnings. Several files or a folder: one
+    /// CSV table (JSON lines with --json), continuing past a bad file.
     Info {
-        /// IES (.ies) or EULUMDAT (.ldt) file.
-        file: PathBuf,
-        /// Print JSON instead of text.
+        /// IES (.ies) or EULUMDAT (.ldt) files or folders of them; a TM-25 ray file or .lvpack.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Print JSON instead of text (several files: one JSON object per line).
         #[arg(long)]
         json: bool,
         /// For an .lvpack: read every page and check its checksum (and that padding is zero).
@@ -59,9 +62,12 @@ enum Command {
     },
     /// Luminance table of the luminous opening in cd/m² (default: C 0–345 step 15, γ 65–85 step 5,
     /// the glare-rating grid).
+    /// Several files or a folder: one CSV table `file,c_deg,gamma_deg,luminance_cd_m2` (JSON lines
+    /// with --json), continuing past a bad file.
     Luminance {
-        /// IES or EULUMDAT file.
-        file: PathBuf,
+        /// IES or EULUMDAT files, or folders of them.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// Print JSON: {"unit":"cd/m2","c":[..],"gamma":[..],"table":[[..]]}, table[i][j] for
         /// gamma[i], c[j].
         #[arg(long)]
@@ -108,19 +114,19 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info {
-            file,
+            files,
             json,
             verify,
             load,
-        } => commands::info(&file, json, verify, &load),
+        } => commands::info(&files, json, verify, &load),
         Command::Sample { file, at, json, load } => commands::sample(&file, &at, json, &load),
         Command::Luminance {
-            file,
+            files,
             json,
             c,
             gamma,
             load,
-        } => commands::luminance(&file, json, &c, &gamma, &load),
+        } => commands::luminance(&files, json, &c, &gamma, &load),
         Command::Lut(args) => commands::lut(&args),
         Command::Solid(args) => commands::solid(&args),
         Command::Plot(args) => commands::plot(&args),

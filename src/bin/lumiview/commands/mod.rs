@@ -22,6 +22,7 @@ macro_rules! outln {
 // The macros above are visible in the submodules declared below (textual macro scope).
 mod cameras;
 mod eval;
+mod info;
 mod lut;
 mod pack;
 mod plot;
@@ -30,13 +31,14 @@ mod render;
 mod solid;
 mod synth;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use lumiview::photometry::{self, LoadOptions, Photometry};
 use serde_json::json;
 
 pub use cameras::{cameras, CamerasArgs};
 pub use eval::{eval, EvalArgs};
+pub use info::info;
 pub use lut::{lut, LutArgs};
 pub use pack::{pack, PackArgs};
 pub use plot::{plot, PlotArgs};
@@ -117,17 +119,116 @@ pub fn print_report(text: &str) -> CliResult {
     }
 }
 
-/// Reads a photometric file with the command-line load options.
+/// Reads a photometric file with the command-line load options and prints its warnings on
+/// stderr. Options that do not apply to the file are errors naming the option and why.
 pub fn load(file: &Path, args: &LoadArgs) -> Result<Photometry, Box<dyn std::error::Error>> {
-    if args.lamp_set == 0 {
+    let p = load_quiet(file, args)?;
+    for w in &p.warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    Ok(p)
+}
+
+/// [`load`] without printing the warnings (for reports that list them themselves).
+pub fn load_quiet(file: &Path, args: &LoadArgs) -> Result<Photometry, Box<dyn std::error::Error>> {
+    if args.lamp_set == Some(0) {
         return Err("--lamp-set counts from 1".into());
     }
     let opts = LoadOptions {
         tilt_deg: args.tilt,
-        lamp_set: args.lamp_set - 1,
+        lamp_set: args.lamp_set.unwrap_or(1) - 1,
         ..LoadOptions::default()
     };
-    Ok(photometry::load(file, &opts)?)
+    let p = photometry::load(file, &opts)?;
+    check_options_apply(&p, args)?;
+    Ok(p)
+}
+
+/// `--tilt` needs an IES file with a TILT table; `--lamp-set` needs an EULUMDAT file.
+fn check_options_apply(p: &Photometry, args: &LoadArgs) -> Result<(), String> {
+    let is_ies = matches!(p.format, photometry::FileFormat::Ies(_));
+    if args.tilt.is_some() {
+        if !is_ies {
+            return Err(format!(
+                "--tilt: {} is EULUMDAT, which has no lamp-tilt table (only IES files with TILT=INCLUDE or \
+                 TILT=<file> do)",
+                p.source
+            ));
+        }
+        if p.tilt.is_none() {
+            return Err(format!(
+                "--tilt: {} has TILT=NONE: its output does not depend on lamp tilt, so there is no factor to apply",
+                p.source
+            ));
+        }
+    }
+    if is_ies && args.lamp_set.is_some_and(|n| n != 1) {
+        return Err(format!(
+            "--lamp-set: {} is an IES file, which has one lamp configuration (lamp sets are EULUMDAT's)",
+            p.source
+        ));
+    }
+    Ok(())
+}
+
+/// The files named on the command line, with each directory replaced by the photometric files
+/// (`.ies`, `.ldt`, any case) in it and its subdirectories, sorted by path.
+pub fn expand_inputs(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>, depth: usize) -> Result<(), String> {
+        if depth > 16 {
+            return Err(format!("{}: folders nested more than 16 deep", dir.display()));
+        }
+        let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: cannot list the folder: {e}", dir.display()))?;
+        let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        entries.sort();
+        for p in entries {
+            let meta = std::fs::symlink_metadata(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+            if meta.is_dir() {
+                walk(&p, out, depth + 1)?;
+            } else if meta.is_file() && is_photometric_name(&p) {
+                out.push(p);
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let before = out.len();
+            walk(p, &mut out, 0)?;
+            if out.len() == before {
+                return Err(format!("{}: the folder holds no .ies or .ldt file", p.display()));
+            }
+        } else {
+            out.push(p.clone());
+        }
+    }
+    if out.is_empty() {
+        return Err("no input file given".into());
+    }
+    Ok(out)
+}
+
+/// True for a file name ending in `.ies` or `.ldt` (any case).
+fn is_photometric_name(p: &Path) -> bool {
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("ies") || e.eq_ignore_ascii_case("ldt"))
+}
+
+/// One CSV line (RFC 4180): fields with a comma, quote or line break are quoted, quotes doubled.
+pub fn csv_row<I: IntoIterator<Item = String>>(fields: I) -> String {
+    fields
+        .into_iter()
+        .map(|f| {
+            if f.contains([',', '"', '\n', '\r']) {
+                format!("\"{}\"", f.replace('"', "\"\""))
+            } else {
+                f
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(",")
 }
 
 /// Parses `FROM:TO:STEP` (degrees) into the list of angles.
@@ -177,159 +278,6 @@ fn fmt_num(v: f64) -> String {
     }
 }
 
-/// `lumiview info`; `verify` (`--verify`) checks every page of a `.lvpack`.
-pub fn info(file: &Path, as_json: bool, verify: bool, args: &LoadArgs) -> CliResult {
-    let kind = detect_kind(file);
-    if verify && !matches!(kind, FileKind::Pack) {
-        return Err(format!("{}: --verify applies to .lvpack files", file.display()).into());
-    }
-    match kind {
-        FileKind::Photometry => {}
-        FileKind::RayFile => return rays::info_rayfile(file, as_json),
-        FileKind::Pack => return pack::info_pack(file, as_json, verify),
-    }
-    let mut out = String::new();
-    let p = load(file, args)?;
-    let (max_cd, max_c, max_g) = p.web.max_intensity();
-    let flux = p.flux_lm();
-    let o = &p.opening;
-    if as_json {
-        let v = json!({
-            "file": p.source,
-            "format": p.format.name(),
-            "labels": p.labels.iter().map(|(k, v)| json!({"key": k, "value": v})).collect::<Vec<_>>(),
-            "photometric_type": format!("{:?}", p.photometric_type),
-            "symmetry": format!("{:?}", p.symmetry),
-            "grid": {
-                "native_horizontal": p.native_size.0,
-                "native_vertical": p.native_size.1,
-                "web_c": p.web.c_angles().len(),
-                "web_gamma": p.web.gamma_angles().len(),
-                "gamma_range_deg": [p.web.gamma_range().0, p.web.gamma_range().1],
-            },
-            "lamp_count": p.lamp_count,
-            "absolute_photometry": p.lamp_flux_lm.is_none(),
-            "lamp_flux_lm": p.lamp_flux_lm,
-            "multiplier": p.multiplier,
-            "candela_scale": p.candela_scale,
-            "input_watts": p.input_watts,
-            "max_intensity_cd": max_cd,
-            "max_intensity_at_deg": {"c": max_c, "gamma": max_g},
-            "integrated_flux_lm": flux,
-            "downward_flux_lm": p.web.flux_between(0.0, 90.0),
-            "integrated_lor": p.integrated_lor(),
-            "declared_lor": p.declared_lor,
-            "declared_luminaire_flux_lm": p.declared_luminaire_flux_lm,
-            "opening": {
-                "shape": format!("{:?}", o.shape),
-                "length_m": o.length_m,
-                "width_m": o.width_m,
-                "height_m": o.height_m,
-                "side_heights_m": o.side_heights_m,
-            },
-            "luminaire_size_m": p.luminaire_size_m,
-            "tilt": p.tilt.as_ref().map(|t| json!({
-                "geometry": t.lamp_to_luminaire_geometry,
-                "angles_deg": t.angles_deg,
-                "factors": t.factors,
-            })),
-            "tilt_applied_deg": p.tilt_applied_deg,
-            "warnings": p.warnings,
-        });
-        outln!(out, "{}", serde_json::to_string_pretty(&v)?);
-        return print_report(&out);
-    }
-    outln!(out, "file              {}", p.source);
-    outln!(out, "format            {}", p.format.name());
-    for (k, v) in &p.labels {
-        let v = v.replace('\n', " / ");
-        if v.is_empty() {
-            continue;
-        }
-        if k.is_empty() {
-            outln!(out, "label             {v}");
-        } else {
-            outln!(out, "  {k:<16}{v}");
-        }
-    }
-    outln!(out, "photometric type  {:?}", p.photometric_type);
-    outln!(out, "symmetry          {:?}", p.symmetry);
-    outln!(
-        out,
-        "grid              {} horizontal × {} vertical angles as stored; web {} C × {} γ (γ {}–{}°)",
-        p.native_size.0,
-        p.native_size.1,
-        p.web.c_angles().len(),
-        p.web.gamma_angles().len(),
-        p.web.gamma_range().0,
-        p.web.gamma_range().1
-    );
-    match p.lamp_flux_lm {
-        Some(f) => outln!(
-            out,
-            "lamps             {} lamp(s), {} lm rated in total",
-            p.lamp_count,
-            fmt_num(f)
-        ),
-        None => outln!(out, "lamps             {} lamp(s), absolute photometry", p.lamp_count),
-    }
-    outln!(
-        out,
-        "multiplier        {} (total factor to cd: {})",
-        fmt_num(p.multiplier),
-        fmt_num(p.candela_scale)
-    );
-    if let Some(t) = &p.tilt {
-        outln!(
-            out,
-            "tilt              {} angles ({:?}), applied at {}",
-            t.angles_deg.len(),
-            t.source,
-            p.tilt_applied_deg
-                .map_or("the measured orientation".to_string(), |a| format!("{a}°"))
-        );
-    }
-    outln!(
-        out,
-        "max intensity     {} cd at C {}°, γ {}°",
-        fmt_num(max_cd),
-        fmt_num(max_c),
-        fmt_num(max_g)
-    );
-    out!(out, "integrated flux   {} lm", fmt_num(flux));
-    if let Some(lor) = p.integrated_lor() {
-        out!(out, " ({:.1} % of lamp flux)", lor * 100.0);
-    }
-    outln!(out);
-    if let Some(f) = p.declared_luminaire_flux_lm {
-        outln!(
-            out,
-            "declared flux     {} lm (LOR {})",
-            fmt_num(f),
-            p.declared_lor.map_or("—".into(), |l| format!("{:.1} %", l * 100.0))
-        );
-    }
-    outln!(
-        out,
-        "opening           {:?} {} × {} × {} m (length × width × height)",
-        o.shape,
-        fmt_num(o.length_m),
-        fmt_num(o.width_m),
-        fmt_num(o.height_m)
-    );
-    if o.side_heights_m.iter().any(|h| *h > 0.0) {
-        let [a, b, c, d] = o.side_heights_m;
-        outln!(out, "side heights      C0 {a} m, C90 {b} m, C180 {c} m, C270 {d} m");
-    }
-    if let Some([l, w, h]) = p.luminaire_size_m {
-        outln!(out, "luminaire size    {l} × {w} × {h} m");
-    }
-    for w in &p.warnings {
-        outln!(out, "warning           {w}");
-    }
-    print_report(&out)
-}
-
 /// `lumiview sample`.
 pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> CliResult {
     let mut out = String::new();
@@ -351,9 +299,10 @@ pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> Cli
     print_report(&out)
 }
 
-/// `lumiview luminance`.
-pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadArgs) -> CliResult {
-    let mut out = String::new();
+/// `lumiview luminance FILE…`: one file prints a table (text or JSON); several files or a folder
+/// write one CSV table `file,c_deg,gamma_deg,luminance_cd_m2` (JSON lines with `--json`),
+/// continuing past a file that cannot be read.
+pub fn luminance(files: &[PathBuf], as_json: bool, c: &str, gamma: &str, args: &LoadArgs) -> CliResult {
     let cs = angle_range(c, "c")?;
     let gs = angle_range(gamma, "gamma")?;
     if gs.iter().any(|g| !(0.0..=180.0).contains(g)) {
@@ -368,18 +317,69 @@ pub fn luminance(file: &Path, as_json: bool, c: &str, gamma: &str, args: &LoadAr
         )
         .into());
     }
-    let p = load(file, args)?;
-    if p.opening.is_point() {
-        return Err(format!(
-            "{}: the luminous opening is a point (no dimensions in the file), so luminance is undefined",
-            p.source
-        )
-        .into());
+    let inputs = expand_inputs(files)?;
+    /// Luminance in cd/m² per [γ][C]; `None` where the opening is seen edge-on.
+    type Table = Vec<Vec<Option<f64>>>;
+    let table_of = |file: &Path| -> Result<(Photometry, Table), Box<dyn std::error::Error>> {
+        let p = load(file, args)?;
+        if p.opening.is_point() {
+            return Err(format!(
+                "{}: the luminous opening is a point (no dimensions in the file), so luminance is undefined",
+                p.source
+            )
+            .into());
+        }
+        let table = gs
+            .iter()
+            .map(|&g| cs.iter().map(|&c| p.luminance(c, g)).collect())
+            .collect();
+        Ok((p, table))
+    };
+    let mut out = String::new();
+    if inputs.len() > 1 || files.iter().any(|f| f.is_dir()) {
+        if !as_json {
+            outln!(out, "file,c_deg,gamma_deg,luminance_cd_m2");
+        }
+        let mut failed = 0usize;
+        for file in &inputs {
+            match table_of(file) {
+                Ok((p, table)) => {
+                    if as_json {
+                        let v = json!({"file": p.source, "unit": "cd/m2", "c": cs, "gamma": gs, "table": table});
+                        outln!(out, "{}", serde_json::to_string(&v)?);
+                        continue;
+                    }
+                    for (g, row) in gs.iter().zip(&table) {
+                        for (c, v) in cs.iter().zip(row) {
+                            let v = v.map_or(String::new(), |v| format!("{v}"));
+                            outln!(
+                                out,
+                                "{}",
+                                csv_row([p.source.clone(), format!("{c}"), format!("{g}"), v])
+                            );
+                        }
+                    }
+                }
+                Err(e) => {
+                    failed += 1;
+                    eprintln!("lumiview: error: {}: {e}", file.display());
+                    if as_json {
+                        outln!(
+                            out,
+                            "{}",
+                            json!({"file": file.display().to_string(), "error": e.to_string()})
+                        );
+                    }
+                }
+            }
+        }
+        print_report(&out)?;
+        if failed > 0 {
+            return Err(format!("{failed} of {} files could not be read (named above)", inputs.len()).into());
+        }
+        return Ok(());
     }
-    let table: Vec<Vec<Option<f64>>> = gs
-        .iter()
-        .map(|&g| cs.iter().map(|&c| p.luminance(c, g)).collect())
-        .collect();
+    let (p, table) = table_of(&inputs[0])?;
     if as_json {
         let v = json!({"unit": "cd/m2", "c": cs, "gamma": gs, "table": table});
         outln!(out, "{}", serde_json::to_string(&v)?);
