@@ -32,7 +32,7 @@ import math
 import os
 
 OUT = "tests/data/pairs"
-LAMP_FLUX = 2000.0  # lm, for the EULUMDAT files (values in cd/klm)
+LAMP_FLUX = 8000.0  # lm, for the EULUMDAT files (values in cd/klm); the pairs emit 6963 lm, LOR 87 %
 DC = 15.0
 DG = 5.0
 
@@ -178,7 +178,7 @@ def main():
         write_ies(f"{OUT}/{kind}.ies", f"pair {kind}", ies_h_angles(kind), func)
         c_angles = [i * DC for i in range(24)] if isym != 1 else [0.0]
         write_ldt(f"{OUT}/{kind}.ldt", f"pair {kind}", isym, c_angles, GAMMAS, func, LAMP_FLUX,
-                  comma=(kind == "c0c180"))
+                  lor=87.0, comma=(kind == "c0c180"))
     # The full luminaire turned 90 degrees counter-clockwise: what was at C now lies at C + 90.
     write_ies(f"{OUT}/rotated90.ies", "pair full rotated 90", ies_h_angles("full"),
               lambda c, g: f(c - 90.0, g), width=0.6, length=0.3)
@@ -196,8 +196,8 @@ def main():
     # The side-lit luminaire: brightest towards C0, then C90, C270, C180 near the horizontal.
     gammas = [i * 5.0 for i in range(19)]
     write_ldt("tests/data/fixtures/side_lit.ldt", "side-lit test luminaire", 0,
-              [i * DC for i in range(24)], gammas, side_lit, 1000.0, length_mm=600, width_mm=150,
-              lor=90.0, heights_mm=(60, 30, 0, 15), luminaire_mm=(620, 170, 80))
+              [i * DC for i in range(24)], gammas, side_lit, 1500.0, length_mm=600, width_mm=150,
+              lor=89.1, heights_mm=(60, 30, 0, 15), luminaire_mm=(620, 170, 80))
 
 
 def side_lit(c_deg, g_deg):

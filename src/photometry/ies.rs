@@ -463,28 +463,51 @@ pub fn parse(
     let horizontal_deg = tokens.numbers(n_horiz, "horizontal angles")?;
     let total = n_vert.saturating_mul(n_horiz);
     let mut candela = Vec::with_capacity(total.min(tokens.remaining()));
-    let mut negative = None;
+    // Negative values: count, smallest, its index and line.
+    let mut negative: Option<(usize, f64, usize, usize)> = None;
     for _ in 0..total {
         let line = tokens.line();
         let v = tokens.number("candela values")?;
-        if v < 0.0 && negative.is_none() {
-            negative = Some((candela.len(), line));
+        if v < 0.0 {
+            let (n, least, at, at_line) = negative.unwrap_or((0, 0.0, candela.len(), line));
+            negative = Some(if v < least {
+                (n + 1, v, candela.len(), line)
+            } else {
+                (n + 1, least, at, at_line)
+            });
         }
         candela.push(v);
     }
-    if let Some((pos, value_line)) = negative {
-        return Err(parse_error(
-            file,
-            Some(value_line),
-            "candela values",
-            format!(
-                "negative candela {} at horizontal {}°, vertical {}°",
-                candela[pos],
-                horizontal_deg[pos / n_vert],
-                vertical_deg[pos % n_vert]
-            ),
-        )
-        .into());
+    let mut vertical_deg = vertical_deg;
+    let mut horizontal_deg = horizontal_deg;
+    if let Some((n, least, at, at_line)) = negative {
+        // Negative candela come from background subtraction in real measurements: read as no
+        // light, and say so.
+        warnings.push(format!(
+            "line {at_line}: {n} negative candela value(s) read as 0 (the smallest, {least}, at horizontal {}°, \
+             vertical {}°)",
+            horizontal_deg[at / n_vert],
+            vertical_deg[at % n_vert]
+        ));
+        for v in &mut candela {
+            *v = v.max(0.0);
+        }
+    }
+    if let Some(perm) = super::web::order_angles(&mut vertical_deg) {
+        warnings.push("vertical angles are not in increasing order: read in increasing order".into());
+        for row in candela.chunks_exact_mut(n_vert) {
+            let old = row.to_vec();
+            for (k, &i) in perm.iter().enumerate() {
+                row[k] = old[i];
+            }
+        }
+    }
+    if let Some(perm) = super::web::order_angles(&mut horizontal_deg) {
+        warnings.push("horizontal angles are not in increasing order: read in increasing order".into());
+        let old = candela.clone();
+        for (k, &i) in perm.iter().enumerate() {
+            candela[k * n_vert..(k + 1) * n_vert].copy_from_slice(&old[i * n_vert..(i + 1) * n_vert]);
+        }
     }
     if tokens.remaining() > 0 {
         warnings.push(format!(

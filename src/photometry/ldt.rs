@@ -308,6 +308,8 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
     // in a short file fails with "truncated" instead of allocating gigabytes first).
     let table_len = planes.saturating_mul(ng);
     let mut intensities = Vec::with_capacity(table_len.min(tokens.remaining()));
+    let mut negative: Option<(usize, f64)> = None;
+    let mut negative_count = 0usize;
     for _ in 0..table_len {
         let value_line = tokens.line();
         let v = tokens.number_comma_decimal("luminous intensities").map_err(|mut e| {
@@ -318,14 +320,28 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
             e
         })?;
         if v < 0.0 {
-            return Err(parse_error(
-                file,
-                Some(value_line),
-                "luminous intensities",
-                format!("negative intensity {v}"),
-            ));
+            negative_count += 1;
+            negative = Some(match negative {
+                None => (value_line, v),
+                Some((first, least)) => (first, least.min(v)),
+            });
         }
-        intensities.push(v);
+        intensities.push(v.max(0.0));
+    }
+    if let Some((line, least)) = negative {
+        lf.warnings.push(format!(
+            "{negative_count} negative intensities read as 0 (the first on line {line}; the smallest {least})"
+        ));
+    }
+    if let Some(perm) = super::web::order_angles(&mut lf.gamma_deg) {
+        lf.warnings
+            .push("γ angles are not in increasing order: read in increasing order".to_string());
+        for plane in intensities.chunks_exact_mut(ng) {
+            let old = plane.to_vec();
+            for (k, &i) in perm.iter().enumerate() {
+                plane[k] = old[i];
+            }
+        }
     }
     if tokens.remaining() > 0 {
         lf.warnings.push(format!(

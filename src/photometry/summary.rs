@@ -255,11 +255,12 @@ pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
     // (γ = −s). Samples at every γ node, plus a zero just outside the measured range, where the
     // intensity drops to zero.
     let mut gammas: Vec<f64> = web.gamma_angles().to_vec();
-    if g1 < 180.0 - ANGLE_EPS {
-        gammas.push((g1 + 1e-6).min(180.0));
+    let just = 2.0 * ANGLE_EPS; // outside the measured range by more than `sample`'s tolerance
+    if g1 < 180.0 - just {
+        gammas.push(g1 + just);
     }
-    if g0 > ANGLE_EPS {
-        gammas.insert(0, (g0 - 1e-6).max(0.0));
+    if g0 > just {
+        gammas.insert(0, g0 - just);
     }
     if gammas[0] > 0.0 {
         gammas.insert(0, 0.0);

@@ -142,6 +142,24 @@ pub struct NativeGrid<'a> {
     pub values: &'a [f64],
 }
 
+/// Puts a file's angle list in increasing order when it is not: a list written in decreasing
+/// order, or distinct angles out of order, happen in real files. Returns the permutation applied
+/// (`new[k] = old[perm[k]]`) so the caller can reorder the rows that go with the angles, or `None`
+/// when the list was already increasing or holds a repeated angle (which stays an error).
+pub(crate) fn order_angles(angles: &mut [f64]) -> Option<Vec<usize>> {
+    if angles.windows(2).all(|w| w[1] > w[0]) || angles.iter().any(|a| !a.is_finite()) {
+        return None;
+    }
+    let mut perm: Vec<usize> = (0..angles.len()).collect();
+    perm.sort_by(|&a, &b| angles[a].total_cmp(&angles[b]));
+    let sorted: Vec<f64> = perm.iter().map(|&i| angles[i]).collect();
+    if sorted.windows(2).any(|w| w[1] <= w[0]) {
+        return None;
+    }
+    angles.copy_from_slice(&sorted);
+    Some(perm)
+}
+
 fn check_increasing(file: &str, what: &str, a: &[f64]) -> Result<(), ParseError> {
     for w in a.windows(2) {
         if w[1] <= w[0] {

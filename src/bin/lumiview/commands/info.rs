@@ -208,14 +208,13 @@ fn info_text(p: &Photometry, s: &Summary) -> String {
             fmt_num(sp.max_cd)
         );
     }
-    outln!(out, "zonal flux        γ zone     lm        % lamp   % luminaire");
+    outln!(out, "zonal flux        γ zone          lm    % lamp  % luminaire");
     for z in s.zones.iter().chain(&s.cumulative_zones) {
         outln!(
             out,
-            "                  {:>3}–{:<3}° {:>9} {:>8} {:>8.1}",
-            z.from_deg,
-            z.to_deg,
-            fmt_num(z.flux_lm),
+            "                  {:<9} {:>9.1} {:>9} {:>12.1}",
+            format!("{}–{}°", z.from_deg, z.to_deg),
+            z.flux_lm,
             z.percent_lamp.map_or("—".to_string(), |v| format!("{v:.1}")),
             z.percent_luminaire
         );
