@@ -91,7 +91,8 @@ pub const LUMI_OPENING_DISC_WITH_SIDES: u32 = 11;
 pub struct lumi_luminaire_info {
     /// `LUMI_LUMINAIRE_FARFIELD` or `LUMI_LUMINAIRE_NEARFIELD`.
     pub kind: u32,
-    /// Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame).
+    /// Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame), at
+    /// a C angle the file stores (not the mirror image of a symmetric file).
     pub max_intensity_cd: f64,
     /// C angle of the maximum, degrees.
     pub max_c_deg: f64,
@@ -508,7 +509,8 @@ pub unsafe extern "C" fn lumi_luminaire_get_info(
             match luminaire_of(c, luminaire)? {
                 Luminaire::Farfield(f) => {
                     let p = &f.photometry;
-                    let (max_cd, mc, mg) = p.web.max_intensity();
+                    let peak = p.peak();
+                    let (max_cd, mc, mg) = (peak.cd, peak.c_deg, peak.gamma_deg);
                     let o = &p.opening;
                     info.max_intensity_cd = max_cd;
                     info.max_c_deg = mc;

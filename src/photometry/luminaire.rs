@@ -314,6 +314,7 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         f.version < IesVersion::Lm63_2002,
     );
     warnings.extend(warn);
+    let (opening, luminaire_size_m) = lumiview_keywords(&f, opening, &mut warnings);
     let lamp_flux_lm = (!f.is_absolute()).then_some(f.lamp_count * f.lumens_per_lamp);
     let labels = f
         .labels
@@ -336,13 +337,70 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         declared_luminaire_flux_lm: None,
         input_watts: Some(f.input_watts),
         opening,
-        luminaire_size_m: None,
+        luminaire_size_m,
         tilt: f.tilt.clone(),
         tilt_applied_deg,
         web,
         warnings,
         raw: RawFile::Ies(Box::new(f)),
     }))
+}
+
+/// Reads the two IES user keywords lumiview's converter writes for what LM-63 cannot hold
+/// (`convert::SIDE_HEIGHTS_KEYWORD`: four side heights in metres, faces seen from C0, C90, C180,
+/// C270; `convert::HOUSING_KEYWORD`: the housing's X, Y, Z extents in metres). Side heights apply
+/// to a rectangular or round opening; anything unreadable is ignored with a warning.
+fn lumiview_keywords(
+    f: &IesFile,
+    opening: LuminousOpening,
+    warnings: &mut Vec<String>,
+) -> (LuminousOpening, Option<[f64; 3]>) {
+    fn numbers<const N: usize>(text: &str) -> Option<[f64; N]> {
+        let v: Vec<f64> = text
+            .split_whitespace()
+            .take(N)
+            .map(|t| {
+                t.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && (0.0..=MAX_OPENING_M).contains(x))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        v.try_into().ok()
+    }
+    let mut opening = opening;
+    if let Some(text) = f.keyword(super::convert::SIDE_HEIGHTS_KEYWORD) {
+        let shape = match opening.shape {
+            OpeningShape::Rectangle | OpeningShape::Box => Some(OpeningShape::RectangleWithSides),
+            OpeningShape::Ellipse | OpeningShape::VerticalCylinder
+                if (opening.size_x_m - opening.size_y_m).abs() <= 1e-9 * opening.size_x_m =>
+            {
+                Some(OpeningShape::DiscWithSides)
+            }
+            _ => None,
+        };
+        match (numbers::<4>(text), shape) {
+            (Some(h), Some(shape)) => {
+                opening.shape = shape;
+                opening.side_heights_m = h;
+                opening.height_m = h.iter().copied().fold(0.0, f64::max);
+            }
+            _ => warnings.push(format!(
+                "[{}] `{text}` ignored: expected four heights in metres for a rectangular or round opening",
+                super::convert::SIDE_HEIGHTS_KEYWORD
+            )),
+        }
+    }
+    let housing = f.keyword(super::convert::HOUSING_KEYWORD).and_then(|text| {
+        let v = numbers::<3>(text);
+        if v.is_none() {
+            warnings.push(format!(
+                "[{}] `{text}` ignored: expected X, Y, Z in metres",
+                super::convert::HOUSING_KEYWORD
+            ));
+        }
+        v.filter(|[x, y, _]| *x > 0.0 && *y > 0.0)
+    });
+    (opening, housing)
 }
 
 fn apply_tilt(

@@ -16,6 +16,7 @@
 //! # Ok::<(), lumiview::photometry::PhotometryError>(())
 //! ```
 
+pub mod convert;
 pub mod error;
 pub mod ies;
 pub mod ldt;

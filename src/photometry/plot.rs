@@ -690,7 +690,8 @@ fn caption_parts(
     plotted_max: f64,
     unit_note: Option<String>,
 ) -> Vec<Vec<String>> {
-    let (max_cd, max_c, max_g) = p.web.max_intensity();
+    let peak = p.peak();
+    let (max_cd, max_c, max_g) = (peak.cd, peak.c_deg, peak.gamma_deg);
     let sym = unit.symbol();
     let mut max = match unit {
         PlotUnit::Candela => format!("Max. intensity {} cd", fmt_value(max_cd)),

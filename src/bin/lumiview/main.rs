@@ -81,6 +81,10 @@ enum Command {
         #[command(flatten)]
         load: LoadArgs,
     },
+    /// Convert between IES LM-63-2019 and EULUMDAT, keeping the intensities (absolute, every C
+    /// plane, the symmetry), the dimensions on their axes, lamp data and labels; what the target
+    /// cannot keep is listed on stderr. Several files or a folder: into an output folder, one table.
+    Convert(commands::ConvertArgs),
     /// Write a look-up table for host lighting (EXR for float encodings, PNG for 8-bit).
     Lut(commands::LutArgs),
     /// Write the photometric solid (r ∝ I) as a mesh (.obj or .glb).
@@ -127,6 +131,7 @@ fn main() -> ExitCode {
             gamma,
             load,
         } => commands::luminance(&files, json, &c, &gamma, &load),
+        Command::Convert(args) => commands::convert(&args),
         Command::Lut(args) => commands::lut(&args),
         Command::Solid(args) => commands::solid(&args),
         Command::Plot(args) => commands::plot(&args),

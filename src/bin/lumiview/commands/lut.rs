@@ -121,7 +121,8 @@ pub fn lut(args: &LutArgs) -> CliResult {
     for (key, value) in encoded.metadata() {
         text.push_str(&format!("{}: {value}\n", key.trim_start_matches("lumiview.")));
     }
-    let (peak, c, g) = p.web.max_intensity();
+    let pk = p.peak();
+    let (peak, c, g) = (pk.cd, pk.c_deg, pk.gamma_deg);
     text.push_str(&format!("web_max_cd: {peak} (at C {c}, gamma {g})\n"));
     print_report(&text)
 }

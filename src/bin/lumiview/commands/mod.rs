@@ -21,6 +21,7 @@ macro_rules! outln {
 
 // The macros above are visible in the submodules declared below (textual macro scope).
 mod cameras;
+mod convert;
 mod eval;
 mod info;
 mod lut;
@@ -37,6 +38,7 @@ use lumiview::photometry::{self, LoadOptions, Photometry};
 use serde_json::json;
 
 pub use cameras::{cameras, CamerasArgs};
+pub use convert::{convert, ConvertArgs};
 pub use eval::{eval, EvalArgs};
 pub use info::info;
 pub use lut::{lut, LutArgs};
