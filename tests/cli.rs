@@ -113,3 +113,136 @@ fn errors_name_the_file_or_argument_and_fail() {
     let out = lumiview(&["luminance", ASA, "--c", "0:10"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--c `0:10`"));
 }
+
+// ---- Issue 15: the first hour with the CLI. Each test failed before its fix. ----
+
+fn stderr_of(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn eulumdat_labels_are_separated_from_their_values() {
+    // "luminaire number" is 16 characters: it ran into its value ("luminaire numberPAIR-1").
+    let out = lumiview(&["info", "tests/data/pairs/full.ldt"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let line = text.lines().find(|l| l.contains("luminaire number")).unwrap();
+    assert!(line.contains("luminaire number PAIR-1"), "{line}");
+}
+
+#[test]
+fn options_that_do_not_apply_are_errors_naming_them() {
+    // --tilt on a TILT=NONE file was silently ignored.
+    let out = lumiview(&["info", ASA, "--tilt", "30"]);
+    assert!(!out.status.success());
+    let e = stderr_of(&out);
+    assert!(
+        e.contains("--tilt") && e.contains("TILT=NONE") && e.contains(ASA),
+        "{e}"
+    );
+    // On an EULUMDAT file too.
+    let out = lumiview(&["sample", "tests/data/pairs/full.ldt", "--at", "0,0", "--tilt", "10"]);
+    assert!(!out.status.success() && stderr_of(&out).contains("--tilt"));
+    // --lamp-set on an IES file.
+    let out = lumiview(&["info", ASA, "--lamp-set", "2"]);
+    assert!(!out.status.success() && stderr_of(&out).contains("--lamp-set"));
+    // --housing on an IES file (checked before the GPU starts).
+    let out = lumiview(&["render", ASA, "--housing", "-o", "/tmp/lumiview-housing.png"]);
+    assert!(!out.status.success());
+    let e = stderr_of(&out);
+    assert!(e.contains("--housing") && e.contains("IES files have none"), "{e}");
+    // PNG-only options on an EXR.
+    let out = lumiview(&["render", ASA, "--legend", "-o", "/tmp/lumiview-legend.exr"]);
+    assert!(!out.status.success() && stderr_of(&out).contains("--legend applies to .png"));
+    // A bad exposure names itself.
+    let out = lumiview(&["render", ASA, "--exposure", "-1", "-o", "/tmp/lumiview-e.png"]);
+    assert!(!out.status.success() && stderr_of(&out).contains("--exposure"));
+}
+
+#[test]
+fn implausible_files_are_flagged_in_info() {
+    // LORL 5999 %: `warnings: []` before.
+    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/pairs/full.ldt")).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut bad = lines.clone();
+    bad[22] = "5999"; // line 23: light output ratio LORL, %
+    let path = std::env::temp_dir().join(format!("lumiview-lor-{}.ldt", std::process::id()));
+    std::fs::write(&path, bad.join("\r\n")).unwrap();
+    let v = json(&["info", path.to_str().unwrap(), "--json"]);
+    let w = v["warnings"].as_array().unwrap();
+    assert!(w.iter().any(|w| w.as_str().unwrap().contains("5999.0 %")), "{w:?}");
+    assert!(w
+        .iter()
+        .all(|w| w.as_str().unwrap().starts_with(path.to_str().unwrap())));
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn cameras_of_a_ray_file_are_its_virtual_scans() {
+    // It said "manifest JSON: expected value at line 1 column 1".
+    let out = lumiview(&["cameras", "tests/data/raysets/Cyl10k.1.tm25ray", "--json"]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    assert!(stderr_of(&out).contains("TM-25 ray file"));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["cameras"].as_u64().unwrap() > 0);
+    let out = lumiview(&["cameras", ASA]);
+    assert!(!out.status.success() && stderr_of(&out).contains("not a near-field scan"));
+}
+
+#[test]
+fn a_folder_gives_one_table_and_continues_past_a_bad_file() {
+    let dir = std::env::temp_dir().join(format!("lumiview-folder-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::copy(
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/",
+            "tests/data/misc/luxcore_ASA_15M_R2.ies"
+        ),
+        dir.join("a.ies"),
+    )
+    .unwrap();
+    std::fs::copy(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/pairs/full.ldt"),
+        dir.join("sub/b.LDT"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("c.ies"), "not photometry").unwrap();
+    std::fs::write(dir.join("notes.txt"), "ignored").unwrap();
+    let out = lumiview(&["info", dir.to_str().unwrap()]);
+    assert!(!out.status.success(), "the bad file makes the exit status non-zero");
+    let text = String::from_utf8(out.stdout).unwrap();
+    let rows: Vec<&str> = text.lines().collect();
+    assert!(rows[0].starts_with("file,format,luminaire,"), "{text}");
+    assert_eq!(rows.len(), 4, "{text}");
+    assert!(rows
+        .iter()
+        .any(|r| r.contains("c.ies") && r.ends_with(|c: char| c != ',')));
+    assert!(stderr_of(&lumiview(&["info", dir.to_str().unwrap()])).contains("c.ies"));
+    // JSON lines, one per file.
+    let out = lumiview(&["info", dir.to_str().unwrap(), "--json"]);
+    let objects: Vec<serde_json::Value> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(objects.len(), 3);
+    assert!(objects.iter().any(|o| o["error"].is_string()));
+    // luminance over the folder: file,c_deg,gamma_deg,luminance_cd_m2.
+    let out = lumiview(&["luminance", dir.to_str().unwrap(), "--c", "0:90:90", "--gamma", "0:0:1"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.starts_with("file,c_deg,gamma_deg,luminance_cd_m2\n"), "{text}");
+    assert_eq!(text.lines().count(), 1 + 2 * 2, "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_demo_shows_its_build() {
+    // The README's demo printed nothing for 11 minutes while it built.
+    let demo = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/demo")).unwrap();
+    for line in demo
+        .lines()
+        .filter(|l| l.trim_start().starts_with("cargo build") || l.contains("cmake --build"))
+    {
+        assert!(!line.contains("--quiet") && !line.contains("/dev/null"), "{line}");
+    }
+}

@@ -12,6 +12,7 @@
 //! the bottom to 180 at the top; the left half shows C180 (resp. C270).
 
 mod layout;
+pub mod legend;
 mod raster;
 mod svg;
 

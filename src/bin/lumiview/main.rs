@@ -114,7 +114,20 @@ enum Command {
     Eval(commands::EvalArgs),
 }
 
+/// Mesa's device-select Vulkan layer probes Wayland while the GPUs are listed and prints "error:
+/// XDG_RUNTIME_DIR is invalid or not set in the environment" twice where there is no desktop
+/// session (ssh, containers, CI). lumiview picks its adapter itself, so there the layer is
+/// switched off (`NODEVICE_SELECT=1`); a value the user set wins.
+fn quiet_vulkan_layers() {
+    let session = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if !session && std::env::var_os("NODEVICE_SELECT").is_none() {
+        // Edition 2021: set before any thread exists (the first thing `main` does).
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_vulkan_layers();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info {

@@ -60,17 +60,45 @@ pub fn load_ray_image_set(
     scan: &[PathBuf],
     import: &ScanImportArgs,
 ) -> Result<(RayImageSet, ImportReport), Box<dyn std::error::Error>> {
-    // A single `.lvpack` (magic "LVPACK") carries its cameras; otherwise manifests.
-    if let [one] = scan {
-        use std::io::Read as _;
-        let mut magic = [0u8; 6];
-        let is_pack = std::fs::File::open(one)
-            .and_then(|mut f| f.read_exact(&mut magic))
-            .is_ok()
-            && &magic == b"LVPACK";
-        if is_pack {
-            let pack = lumiview::nearfield::pack::Pack::open(one)?;
-            return Ok((pack.rayset().clone(), ImportReport::default()));
+    // A single `.lvpack` carries its cameras; a TM-25 ray file has none of its own: it shows the
+    // virtual scan it is binned into (the one `render` draws); otherwise manifests.
+    use lumiview::nearfield::scanfile::{detect, open_scan_of_kind, ScanFileKind};
+    for one in scan {
+        match detect(one)? {
+            Some(ScanFileKind::Pack) if scan.len() == 1 => {
+                let pack = lumiview::nearfield::pack::Pack::open(one)?;
+                return Ok((pack.rayset().clone(), ImportReport::default()));
+            }
+            Some(ScanFileKind::RayFile) if scan.len() == 1 => {
+                let (pack, cached) = open_scan_of_kind(one, ScanFileKind::RayFile, None)?;
+                eprintln!(
+                    "lumiview: note: {} is a TM-25 ray file, which has no cameras: these are the cameras of the \
+                     virtual scan it is binned into for `render`{} (`lumiview rays2scan` chooses others)",
+                    one.display(),
+                    cached.map_or(String::new(), |p| format!(", cached at {}", p.display()))
+                );
+                return Ok((pack.rayset().clone(), ImportReport::default()));
+            }
+            Some(ScanFileKind::Manifest) => {}
+            Some(kind) => {
+                return Err(format!(
+                    "{}: a {} cannot be combined with other scan files",
+                    one.display(),
+                    if kind == ScanFileKind::Pack {
+                        ".lvpack"
+                    } else {
+                        "TM-25 ray file"
+                    }
+                )
+                .into())
+            }
+            None => {
+                return Err(format!(
+                    "{}: not a near-field scan: expected a .lvpack, a scan manifest (.json) or a TM-25 ray file",
+                    one.display()
+                )
+                .into())
+            }
         }
     }
     let (scan, report) = load_scan_with_report(scan, &import.options())?;

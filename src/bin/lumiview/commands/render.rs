@@ -58,14 +58,30 @@ pub struct RenderArgs {
     /// Image size WxH in pixels.
     #[arg(long, default_value = "640x480")]
     pub size: String,
-    /// Exposure in m²/cd for the PNG tone mapping (x = L · exposure, x / (1 + x)); default: 1 / the
-    /// largest luminance seen from this direction, so the opening maps to about 0.5.
+    /// Exposure in m²/cd for the PNG tone mapping (x = L · exposure, display x / (1 + x), then
+    /// sRGB), so stills of different luminaires compare: the default 1e-3 shows 1000 cd/m² as 50 %
+    /// grey. `auto` exposes each view for itself (1 / the luminance seen, or a scan's 99th
+    /// percentile).
+    #[arg(
+        long,
+        default_value = "1e-3",
+        value_name = "M2_PER_CD|auto",
+        allow_hyphen_values = true
+    )]
+    pub exposure: String,
+    /// Keep the PNG's alpha channel (coverage: transparent where there is no luminaire); the
+    /// default is an opaque black background, the luminance of empty space.
     #[arg(long)]
-    pub exposure: Option<f32>,
-    /// Draw the photometric-solid wireframe (radius 0.5 m at the maximum intensity).
+    pub transparent: bool,
+    /// Add a luminance scale bar in cd/m² below the PNG (what each grey level means at this
+    /// exposure).
+    #[arg(long)]
+    pub legend: bool,
+    /// Draw the photometric-solid wireframe (radius 0.5 m at the maximum intensity; far-field
+    /// files only).
     #[arg(long)]
     pub solid: bool,
-    /// Draw the housing box (EULUMDAT luminaire dimensions).
+    /// Draw the housing box (EULUMDAT luminaire dimensions; IES files have none).
     #[arg(long)]
     pub housing: bool,
     #[command(flatten)]
@@ -102,6 +118,19 @@ fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
     }
 }
 
+/// `--exposure`: a positive finite value in m²/cd, or `auto` (`None`).
+fn parse_exposure(s: &str) -> Result<Option<f32>, String> {
+    if s.eq_ignore_ascii_case("auto") {
+        return Ok(None);
+    }
+    match s.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(Some(v)),
+        _ => Err(format!(
+            "--exposure `{s}`: expected a positive number in m²/cd (e.g. 1e-3: 1000 cd/m² shows as 50 % grey) or auto"
+        )),
+    }
+}
+
 fn parse_mode(s: &str) -> Result<SelectionMode, String> {
     match s {
         "nearest" => Ok(SelectionMode::Nearest),
@@ -132,6 +161,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
     }
     let camera = a.camera.as_deref().map(parse_camera).transpose()?;
     let mode = parse_mode(&a.mode)?;
+    let exposure_arg = parse_exposure(&a.exposure)?;
     let ext = a
         .output
         .extension()
@@ -142,9 +172,75 @@ pub fn render(a: &RenderArgs) -> CliResult {
         Some("exr") => true,
         _ => return Err(format!("{}: the output must end in .png or .exr", a.output.display()).into()),
     };
+    if exr {
+        for (given, name) in [
+            (a.transparent, "--transparent"),
+            (a.legend, "--legend"),
+            (a.exposure != "1e-3", "--exposure"),
+        ] {
+            if given {
+                return Err(format!(
+                    "{name} applies to .png stills; {} is an OpenEXR of luminance in cd/m² (no tone mapping, alpha = \
+                     coverage)",
+                    a.output.display()
+                )
+                .into());
+            }
+        }
+    }
+    // Read and check the input before starting the GPU: options that do not apply are errors.
+    let kind = detect(&a.file)?;
+    let photometry = match kind {
+        Some(_) => {
+            for (given, name) in [
+                (a.solid, "--solid"),
+                (a.housing, "--housing"),
+                (a.load.tilt.is_some(), "--tilt"),
+                (a.load.lamp_set.is_some(), "--lamp-set"),
+            ] {
+                if given {
+                    return Err(format!(
+                        "{name} applies to photometric files (IES, EULUMDAT); {} is a near-field scan",
+                        a.file.display()
+                    )
+                    .into());
+                }
+            }
+            None
+        }
+        None => {
+            if a.proxy.is_some() {
+                return Err(format!(
+                    "--proxy applies to near-field scans; {} is a photometric file",
+                    a.file.display()
+                )
+                .into());
+            }
+            let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
+            if a.housing && p.luminaire_size_m.is_none() {
+                return Err(format!(
+                    "--housing: {} gives no luminaire (housing) dimensions{}",
+                    a.file.display(),
+                    if matches!(p.format, lumiview::photometry::FileFormat::Ies(_)) {
+                        " (IES files have none; EULUMDAT files do)"
+                    } else {
+                        " (its luminaire length is 0)"
+                    }
+                )
+                .into());
+            }
+            if p.opening.is_point() {
+                eprintln!(
+                    "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
+                    a.file.display()
+                );
+            }
+            Some(p)
+        }
+    };
     let mut r = Renderer::new(&ContextDesc::default())?;
-    let loaded = match detect(&a.file)? {
-        Some(kind) => {
+    let loaded = match (kind, photometry) {
+        (Some(kind), _) => {
             let (pack, cached) = open_scan_of_kind(&a.file, kind, None)?;
             let centre = pack.rayset().sphere.centre_m.as_vec3();
             let cameras = pack.image_count();
@@ -168,17 +264,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
                 ),
             }
         }
-        None => {
-            if a.proxy.is_some() {
-                return Err("--proxy applies to near-field scans only".into());
-            }
-            let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
-            if p.opening.is_point() {
-                eprintln!(
-                    "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
-                    a.file.display()
-                );
-            }
+        (None, Some(p)) => {
             let lum = r.add_photometry(p.clone())?;
             r.add_instance(lum, Mat4::IDENTITY)?;
             let l_here = p.luminance(c, g).unwrap_or(0.0);
@@ -188,6 +274,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
                 what: format!("far-field, L = {l_here:.1} cd/m² at the centre"),
             }
         }
+        (None, None) => return Err(format!("{}: nothing was loaded", a.file.display()).into()),
     };
     let color = if exr {
         ColorFormat::Rgba32Float
@@ -244,17 +331,29 @@ pub fn render(a: &RenderArgs) -> CliResult {
         },
         solid_radius_m: 0.5,
     };
-    let l_ref = match (a.exposure, loaded.l_ref) {
-        (Some(_), _) => None,
-        (None, Some(l)) => Some(l),
-        // A scan: the 99th percentile of the luminance in view, from a first render in cd/m².
-        (None, None) if !exr => Some(percentile_luminance(&mut r, &cam, w, h, 0.99)?),
-        (None, None) => None,
+    let (exposure, exposure_note) = match exposure_arg {
+        Some(e) => (
+            e,
+            if a.exposure == "1e-3" {
+                "default: 1000 cd/m² shows as 50 % grey"
+            } else {
+                "as given"
+            },
+        ),
+        None => {
+            let l_ref = match loaded.l_ref {
+                Some(l) => l,
+                // A scan: the 99th percentile of the luminance in view, from a first render.
+                None => percentile_luminance(&mut r, &cam, w, h, 0.99)?,
+            };
+            let e = if l_ref > 0.0 && (1.0 / l_ref).is_finite() && (1.0 / l_ref) < f64::from(f32::MAX) {
+                (1.0 / l_ref) as f32
+            } else {
+                1e-3
+            };
+            (e, "auto: this view's luminance shows as 50 % grey")
+        }
     };
-    let exposure = a.exposure.unwrap_or(match l_ref {
-        Some(l) if l > 0.0 => (1.0 / l) as f32,
-        _ => 1e-3,
-    });
     ro.exposure = exposure;
     r.render(&mut t, &cam, &ro)?;
     let px = t.read(&r.ctx, Attachment::Color)?;
@@ -269,8 +368,22 @@ pub fn render(a: &RenderArgs) -> CliResult {
         })
         .map_err(|e| format!("{}: {e}", a.output.display()))?;
     } else {
+        let mut px = px;
+        if !a.transparent {
+            // The colour is premultiplied by coverage: over black it stays as it is.
+            for p in px.chunks_exact_mut(4) {
+                p[3] = 255;
+            }
+        }
+        let (px, h_out) = if a.legend {
+            let legend = luminance_legend(w, exposure, a.transparent)?;
+            let lh = legend.len() as u32 / (4 * w);
+            ([px, legend].concat(), h + lh)
+        } else {
+            (px, h)
+        };
         let file = std::fs::File::create(&a.output).map_err(|e| format!("{}: {e}", a.output.display()))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h_out);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
         let mut wr = enc.write_header().map_err(|e| format!("{}: {e}", a.output.display()))?;
@@ -278,7 +391,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
             .map_err(|e| format!("{}: {e}", a.output.display()))?;
     }
     println!(
-        "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m; {}; exposure {exposure:e} m²/cd; {} ({})",
+        "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m; {}; {}; {} ({})",
         a.output.display(),
         eye.x,
         eye.y,
@@ -287,10 +400,59 @@ pub fn render(a: &RenderArgs) -> CliResult {
         target.y,
         target.z,
         loaded.what,
+        if exr {
+            "no exposure (luminance file)".to_string()
+        } else {
+            format!("exposure {exposure:e} m²/cd ({exposure_note})")
+        },
         r.ctx.caps.adapter_name,
-        if exr { "luminance, cd/m²" } else { "tone-mapped" }
+        if exr {
+            "luminance, cd/m²"
+        } else if a.transparent {
+            "tone-mapped, alpha = coverage"
+        } else {
+            "tone-mapped on black"
+        }
     );
     Ok(())
+}
+
+/// The scale bar under a `--legend` still: luminance in cd/m² from where the tone map leaves
+/// black (display 2 %) to where it saturates (98 %), in the still's own colours, as RGBA rows
+/// `width` wide.
+fn luminance_legend(width: u32, exposure: f32, transparent: bool) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+    use lumiview::gpu::farfield::tone_map;
+    use lumiview::photometry::plot::legend::ScaleBar;
+    let e = f64::from(exposure);
+    let srgb8 = |v: f64| {
+        let s = if v <= 0.003_130_8 {
+            12.92 * v
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round().clamp(0.0, 255.0) as u8
+    };
+    let colour = |l: f64| {
+        let g = srgb8(tone_map(l, e));
+        [g, g, g]
+    };
+    // display d = x / (1 + x): d = 0.02 at x = 0.0204, d = 0.98 at x = 49.
+    let bar = ScaleBar {
+        width_px: width.max(160),
+        min: 0.0204 / e,
+        max: 49.0 / e,
+        caption: format!(
+            "luminance in cd/m², exposure {exposure:e} m²/cd (1/exposure = {:.0} cd/m² is 50 % grey){}",
+            1.0 / e,
+            if transparent { "" } else { "; black: no light" }
+        ),
+        colour_of: &colour,
+    };
+    let pm = bar.to_pixmap()?;
+    if pm.width() != width {
+        return Err(format!("--legend needs a still at least 160 px wide (this one is {width} px)").into());
+    }
+    Ok(pm.data().to_vec())
 }
 
 /// The `q` quantile of the luminance (cd/m²) over the covered pixels of a render from `cam`.
