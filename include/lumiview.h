@@ -37,7 +37,7 @@
 // Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 #define LUMI_OPENING_POINT 0
 
-// Flat rectangle length × width.
+// Flat rectangle (extents X × Y).
 #define LUMI_OPENING_RECTANGLE 1
 
 // Box with luminous sides.
@@ -52,10 +52,10 @@
 // Ellipsoid / sphere.
 #define LUMI_OPENING_ELLIPSOID 5
 
-// Horizontal cylinder along the length (X).
+// Horizontal cylinder along X (the C0–C180 axis; an IES file's length).
 #define LUMI_OPENING_HORIZONTAL_CYLINDER_X 6
 
-// Horizontal cylinder along the width (Y).
+// Horizontal cylinder along Y (the C90–C270 axis; an IES file's width).
 #define LUMI_OPENING_HORIZONTAL_CYLINDER_Y 7
 
 // Vertical ellipse facing C0.
@@ -234,7 +234,8 @@ typedef uint64_t lumi_luminaire;
 typedef struct lumi_luminaire_info {
   // `LUMI_LUMINAIRE_FARFIELD` or `LUMI_LUMINAIRE_NEARFIELD`.
   uint32_t kind;
-  // Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame).
+  // Largest intensity (cd) and its direction (C, γ in degrees, lumiview's Type C frame), at
+  // a C angle the file stores (not the mirror image of a symmetric file).
   double max_intensity_cd;
   // C angle of the maximum, degrees.
   double max_c_deg;
@@ -244,9 +245,11 @@ typedef struct lumi_luminaire_info {
   double flux_lm;
   // One of `LUMI_OPENING_*`.
   uint32_t opening_shape;
-  // Opening extents along X (length), Y (width), Z (height), metres.
+  // Opening extents along X (C0–C180), Y (C90–C270) and Z, metres. An IES file's length is X,
+  // its width Y; an EULUMDAT file's width is X, its length Y (docs/conventions.md).
   double opening_size_m[3];
-  // Housing size (length, width, height) in metres; all 0 when the file gives none.
+  // Housing extents along X, Y and Z in metres (EULUMDAT luminaire dimensions: width along X,
+  // length along Y); all 0 when the file gives none.
   double housing_size_m[3];
   // Near-field: capture cameras (images) in the scan.
   uint32_t camera_count;
