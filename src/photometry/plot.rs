@@ -508,7 +508,12 @@ impl PolarPlot {
 
     /// The diagram as a standalone SVG document (UTF-8 text starting with `<svg`).
     pub fn to_svg(&self) -> String {
-        svg::document(self)
+        svg::document(
+            self.width,
+            self.height,
+            &format!("Polar intensity diagram: {}", self.title),
+            &self.scene,
+        )
     }
 
     /// The diagram rasterised, anti-aliased, onto an opaque white pixmap of `width × height`.
@@ -516,7 +521,7 @@ impl PolarPlot {
     /// # Errors
     /// [`PlotError::Render`] if the pixmap cannot be allocated.
     pub fn to_pixmap(&self) -> Result<Pixmap, PlotError> {
-        raster::render(self, &Typeface::load()?)
+        raster::render(self.width, self.height, &self.scene, &Typeface::load()?)
     }
 
     /// The diagram as PNG file bytes (8-bit RGBA).

@@ -1,18 +1,18 @@
-//! The PNG rasteriser of the polar diagram: tiny-skia (anti-aliased) for the shapes, ab_glyph
+//! The PNG rasteriser of the diagrams: tiny-skia (anti-aliased) for the shapes, ab_glyph
 //! coverage blended source-over for the text, onto an opaque white pixmap.
 
 use ab_glyph::{point, Font};
 use tiny_skia::{Color, FillRule, LineCap, LineJoin, Paint, PathBuilder, Pixmap, Rect, Stroke, StrokeDash, Transform};
 
-use super::{LineStyle, PlotError, PolarPlot, Rgba, Shape, TextAnchor, TextItem, Typeface};
+use super::{LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor, TextItem, Typeface};
 
-/// Draws every primitive of the plot's scene, in order.
-pub(super) fn render(plot: &PolarPlot, face: &Typeface) -> Result<Pixmap, PlotError> {
-    let mut pm = Pixmap::new(plot.width, plot.height).ok_or_else(|| PlotError::Render {
-        message: format!("cannot allocate a {} × {} image", plot.width, plot.height),
+/// Draws every primitive of `scene`, in order, onto an opaque white `width × height` pixmap.
+pub(super) fn render(width: u32, height: u32, scene: &Scene, face: &Typeface) -> Result<Pixmap, PlotError> {
+    let mut pm = Pixmap::new(width, height).ok_or_else(|| PlotError::Render {
+        message: format!("cannot allocate a {width} × {height} image"),
     })?;
     pm.fill(Color::WHITE);
-    for (_, shape) in &plot.scene.items {
+    for (_, shape) in &scene.items {
         draw(&mut pm, face, shape);
     }
     Ok(pm)

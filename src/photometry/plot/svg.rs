@@ -1,26 +1,27 @@
-//! The SVG writer of the polar diagram: one element per primitive of the plot's scene, grouped by
-//! layer, text as `<text>` in DejaVu Sans (the font the layout was measured with).
+//! The SVG writer of the diagrams: one element per primitive of a scene, grouped by layer, text as
+//! `<text>` in DejaVu Sans (the font the layout was measured with).
 
 use std::fmt::Write as _;
 
-use super::{trim_number, LineStyle, PolarPlot, Rgba, Shape, TextAnchor};
+use super::{trim_number, LineStyle, Rgba, Scene, Shape, TextAnchor};
 
 /// Font family written into the SVG; DejaVu Sans first so the metrics match the layout.
 const FONT_FAMILY: &str = "'DejaVu Sans', Verdana, Arial, sans-serif";
 
-/// The whole document.
-pub(super) fn document(plot: &PolarPlot) -> String {
+/// The whole document: `width × height` user units (pixels), a `<title>`, a white background and
+/// the scene.
+pub(super) fn document(width: u32, height: u32, title: &str, scene: &Scene) -> String {
     let mut s = String::with_capacity(64 * 1024);
-    let (w, h) = (plot.width, plot.height);
+    let (w, h) = (width, height);
     let _ = writeln!(
         s,
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" font-family="{FONT_FAMILY}">"#
     );
-    let title = escape(&format!("Polar intensity diagram: {}", plot.title));
+    let title = escape(title);
     let _ = writeln!(s, "<title>{title}</title>");
     let _ = writeln!(s, r##"<rect width="{w}" height="{h}" fill="#ffffff"/>"##);
     let mut open: Option<&str> = None;
-    for (layer, shape) in &plot.scene.items {
+    for (layer, shape) in &scene.items {
         if open != Some(*layer) {
             if open.is_some() {
                 s.push_str("</g>\n");
