@@ -23,6 +23,7 @@ macro_rules! outln {
 mod cameras;
 mod eval;
 mod info;
+mod isolux;
 mod lut;
 mod pack;
 mod plot;
@@ -39,6 +40,7 @@ use serde_json::json;
 pub use cameras::{cameras, CamerasArgs};
 pub use eval::{eval, EvalArgs};
 pub use info::info;
+pub use isolux::{isolux, IsoluxArgs};
 pub use lut::{lut, LutArgs};
 pub use pack::{pack, PackArgs};
 pub use plot::{plot, PlotArgs};
