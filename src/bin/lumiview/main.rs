@@ -87,7 +87,7 @@ enum Command {
     Solid(commands::SolidArgs),
     /// Write the polar intensity diagram (C0–C180 and C90–C270 planes) as .svg or .png.
     Plot(commands::PlotArgs),
-    /// Illuminance in lx on a floor plane --height metres below the luminaire: isolux diagram
+    /// Write illuminance in lx on a floor plane --height metres below the luminaire: isolux diagram
     /// (.png or .svg: lines at 1-2-5 values, axes in m) or the grid as .csv (x_m,y_m,E_lx).
     Isolux(commands::IsoluxArgs),
     /// Render a still of the luminaire's appearance on the GPU (Vulkan): .png tone-mapped or .exr in cd/m².
