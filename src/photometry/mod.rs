@@ -1,5 +1,6 @@
 //! Far-field photometry, pure CPU: IES LM-63 and EULUMDAT readers, the absolute photometric web,
-//! luminous openings and luminance, host-lighting look-up tables, photometric solids and plots.
+//! luminous openings and luminance, host-lighting look-up tables, photometric solids, polar plots,
+//! and illuminance on a floor plane with its isolux lines.
 //!
 //! ```
 //! use lumiview::photometry::{load_from_text, LoadOptions};
@@ -16,9 +17,11 @@
 //! # Ok::<(), lumiview::photometry::PhotometryError>(())
 //! ```
 
+pub mod contour;
 pub mod convert;
 pub mod error;
 pub mod ies;
+pub mod isolux;
 pub mod ldt;
 pub mod luminaire;
 pub mod lut;

@@ -1,3 +1,7 @@
+//! Diagrams for lighting designers, drawn with one bundled font into SVG and PNG: the polar
+//! intensity diagram here, and the isolux diagram of illuminance on a floor plane
+//! ([`IsoluxPlot`], `plot/isolux.rs`).
+//!
 //! The polar intensity diagram ("LDC", light distribution curve) that lighting designers read: the
 //! C0–C180 and C90–C270 planes drawn over the full circle, γ = 0 (nadir) pointing down, rings at
 //! round 1-2-5 values, spokes every 15°, a legend and a caption with maximum intensity and flux.
@@ -11,6 +15,7 @@
 //! SVG's user units). The right half of the diagram shows C0 (resp. C90) with γ running from 0 at
 //! the bottom to 180 at the top; the left half shows C180 (resp. C270).
 
+mod isolux;
 mod layout;
 pub mod legend;
 mod raster;
@@ -26,6 +31,8 @@ use self::layout::{
     draw_corner_labels, draw_gamma_labels, draw_grid, draw_header, draw_legend, draw_ring_labels, spoke_labels, Layout,
 };
 use super::luminaire::Photometry;
+
+pub use self::isolux::{write_isolux, ContourLabel, IsoluxPlot, IsoluxPlotOptions};
 
 /// The bundled font (DejaVu Sans, see `assets/fonts/DejaVuSans-LICENSE.txt`): every label is
 /// measured with it and the PNG's text is rasterised from it.
@@ -115,7 +122,7 @@ impl PlotFormat {
     }
 }
 
-/// An error while computing or writing a polar diagram.
+/// An error while computing or writing a diagram (polar or isolux).
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
     /// The output file name has neither `.svg` nor `.png` as its extension.
@@ -137,6 +144,14 @@ pub enum PlotError {
         file: String,
         /// Which flux is missing or zero.
         reason: String,
+    },
+    /// No point of an isolux grid is lit, so there is no line to draw.
+    #[error("{file}: no light reaches the floor plane {height_m} m below it (0 lx on the whole grid): no isolux line to draw")]
+    NoIlluminance {
+        /// The photometric file's name.
+        file: String,
+        /// The mounting height, metres.
+        height_m: f64,
     },
     /// The output file could not be written.
     #[error("{path}: cannot write file: {source}")]
@@ -282,7 +297,65 @@ enum Shape {
         fill: Rgba,
         stroke: LineStyle,
     },
+    /// A stroked, unfilled polyline, closed back to its first point when `closed`.
+    Polyline {
+        points: Vec<[f64; 2]>,
+        closed: bool,
+        stroke: LineStyle,
+    },
+    /// A raster image drawn pixel for pixel with its top-left corner at `min` (whole pixels).
+    Image(RasterImage),
     Text(TextItem),
+}
+
+/// An RGBA8 image placed in a scene, kept both as premultiplied pixels (for the PNG writer) and
+/// as PNG bytes (embedded in the SVG).
+#[derive(Clone, PartialEq)]
+struct RasterImage {
+    /// Top-left corner, whole pixels.
+    min: [u32; 2],
+    width: u32,
+    height: u32,
+    /// Premultiplied RGBA8, row-major from the top, `width × height × 4` bytes.
+    rgba: Vec<u8>,
+    /// The same image encoded as PNG.
+    png: Vec<u8>,
+}
+
+impl RasterImage {
+    /// An image from premultiplied RGBA8 pixels.
+    ///
+    /// # Errors
+    /// [`PlotError::Render`] when the size does not match the pixels or PNG encoding fails.
+    fn new(min: [u32; 2], width: u32, height: u32, rgba: Vec<u8>) -> Result<Self, PlotError> {
+        let size = tiny_skia::IntSize::from_wh(width, height).ok_or_else(|| PlotError::Render {
+            message: format!("empty {width} × {height} image"),
+        })?;
+        let pixmap = Pixmap::from_vec(rgba.clone(), size).ok_or_else(|| PlotError::Render {
+            message: format!("{} bytes are not a {width} × {height} RGBA image", rgba.len()),
+        })?;
+        let png = pixmap.encode_png().map_err(|e| PlotError::Render {
+            message: format!("PNG encoding of the {width} × {height} fill: {e}"),
+        })?;
+        Ok(RasterImage {
+            min,
+            width,
+            height,
+            rgba,
+            png,
+        })
+    }
+}
+
+impl std::fmt::Debug for RasterImage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("RasterImage")
+            .field("min", &self.min)
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("png_bytes", &self.png.len())
+            .finish_non_exhaustive()
+    }
 }
 
 /// Primitives grouped by layer (the SVG's `<g id>`), in drawing order.

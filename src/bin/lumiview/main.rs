@@ -91,6 +91,9 @@ enum Command {
     Solid(commands::SolidArgs),
     /// Write the polar intensity diagram (C0–C180 and C90–C270 planes) as .svg or .png.
     Plot(commands::PlotArgs),
+    /// Write illuminance in lx on a floor plane --height metres below the luminaire: isolux diagram
+    /// (.png or .svg: lines at 1-2-5 values, axes in m) or the grid as .csv (x_m,y_m,E_lx).
+    Isolux(commands::IsoluxArgs),
     /// Render a still of the luminaire's appearance on the GPU (Vulkan): .png tone-mapped or .exr in cd/m².
     Render(commands::RenderArgs),
     /// Where a near-field scan's cameras sit and how well they cover the sphere: cameras per
@@ -148,6 +151,7 @@ fn main() -> ExitCode {
         Command::Lut(args) => commands::lut(&args),
         Command::Solid(args) => commands::solid(&args),
         Command::Plot(args) => commands::plot(&args),
+        Command::Isolux(args) => commands::isolux(&args),
         Command::Render(args) => commands::render(&args),
         Command::Cameras(args) => commands::cameras(&args),
         Command::Rays2scan(args) => commands::rays2scan(&args),

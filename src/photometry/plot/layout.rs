@@ -9,25 +9,25 @@ use super::{
 
 /// An axis-aligned box, pixels.
 #[derive(Debug, Clone, Copy)]
-struct Bounds {
-    min: [f64; 2],
-    max: [f64; 2],
+pub(super) struct Bounds {
+    pub(super) min: [f64; 2],
+    pub(super) max: [f64; 2],
 }
 
 impl Bounds {
-    fn grown(&self, by: f64) -> Bounds {
+    pub(super) fn grown(&self, by: f64) -> Bounds {
         Bounds {
             min: [self.min[0] - by, self.min[1] - by],
             max: [self.max[0] + by, self.max[1] + by],
         }
     }
 
-    fn overlaps(&self, o: &Bounds) -> bool {
+    pub(super) fn overlaps(&self, o: &Bounds) -> bool {
         self.min[0] < o.max[0] && o.min[0] < self.max[0] && self.min[1] < o.max[1] && o.min[1] < self.max[1]
     }
 
     /// Whether the segment a–b passes through the box (Liang–Barsky clipping).
-    fn hits_segment(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+    pub(super) fn hits_segment(&self, a: [f64; 2], b: [f64; 2]) -> bool {
         let d = [b[0] - a[0], b[1] - a[1]];
         let (mut t0, mut t1) = (0.0f64, 1.0f64);
         for k in 0..2 {

@@ -2,7 +2,10 @@
 //! coverage blended source-over for the text, onto an opaque white pixmap.
 
 use ab_glyph::{point, Font};
-use tiny_skia::{Color, FillRule, LineCap, LineJoin, Paint, PathBuilder, Pixmap, Rect, Stroke, StrokeDash, Transform};
+use tiny_skia::{
+    Color, FillRule, IntSize, LineCap, LineJoin, Paint, PathBuilder, Pixmap, PixmapPaint, Rect, Stroke, StrokeDash,
+    Transform,
+};
 
 use super::{LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor, TextItem, Typeface};
 
@@ -78,6 +81,36 @@ fn draw(pm: &mut Pixmap, face: &Typeface, shape: &Shape) {
             if let Some(path) = pb.finish() {
                 pm.fill_path(&path, &paint(*fill), FillRule::Winding, id, None);
                 pm.stroke_path(&path, &paint(st.colour), &stroke(st), id, None);
+            }
+        }
+        Shape::Polyline {
+            points,
+            closed,
+            stroke: st,
+        } => {
+            let mut pb = PathBuilder::new();
+            for (i, p) in points.iter().enumerate() {
+                if i == 0 {
+                    pb.move_to(p[0] as f32, p[1] as f32);
+                } else {
+                    pb.line_to(p[0] as f32, p[1] as f32);
+                }
+            }
+            if *closed {
+                pb.close();
+            }
+            if let Some(path) = pb.finish() {
+                pm.stroke_path(&path, &paint(st.colour), &stroke(st), id, None);
+            }
+        }
+        Shape::Image(img) => {
+            let image = IntSize::from_wh(img.width, img.height).and_then(|s| Pixmap::from_vec(img.rgba.clone(), s));
+            if let Some(image) = image {
+                let (x, y) = (
+                    i32::try_from(img.min[0]).unwrap_or(i32::MAX),
+                    i32::try_from(img.min[1]).unwrap_or(i32::MAX),
+                );
+                pm.draw_pixmap(x, y, image.as_ref(), &PixmapPaint::default(), id, None);
             }
         }
         Shape::Text(t) => draw_text(pm, face, t),

@@ -137,6 +137,33 @@ fn shape_element(s: &mut String, shape: &Shape) {
                 stroke(st)
             )
         }
+        Shape::Polyline {
+            points,
+            closed,
+            stroke: st,
+        } => {
+            let mut d = String::with_capacity(points.len() * 16);
+            for (i, p) in points.iter().enumerate() {
+                let _ = write!(d, "{}{} {}", if i == 0 { "M" } else { " L" }, num(p[0]), num(p[1]));
+            }
+            if *closed {
+                d.push_str(" Z");
+            }
+            writeln!(
+                s,
+                r#"<path d="{d}" fill="none" {} stroke-linejoin="round"/>"#,
+                stroke(st)
+            )
+        }
+        Shape::Image(img) => writeln!(
+            s,
+            r#"<image x="{}" y="{}" width="{}" height="{}" preserveAspectRatio="none" href="data:image/png;base64,{}"/>"#,
+            img.min[0],
+            img.min[1],
+            img.width,
+            img.height,
+            base64(&img.png)
+        ),
         Shape::Text(t) => {
             let anchor = match t.anchor {
                 TextAnchor::Start => "start",
@@ -156,9 +183,43 @@ fn shape_element(s: &mut String, shape: &Shape) {
     };
 }
 
+/// Standard base64 (RFC 4648, with padding), for images embedded as data URLs.
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [chunk[0], *chunk.get(1).unwrap_or(&0), *chunk.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(char::from(ALPHABET[((n >> (18 - 6 * k)) & 63) as usize]));
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn base64_of_rfc_4648_vectors() {
+        let cases = [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ];
+        for (plain, encoded) in cases {
+            assert_eq!(base64(plain.as_bytes()), encoded);
+        }
+    }
 
     #[test]
     fn escapes_markup() {
