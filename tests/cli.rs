@@ -230,8 +230,12 @@ fn a_folder_gives_one_table_and_continues_past_a_bad_file() {
     // luminance over the folder: file,c_deg,gamma_deg,luminance_cd_m2.
     let out = lumiview(&["luminance", dir.to_str().unwrap(), "--c", "0:90:90", "--gamma", "0:0:1"]);
     let text = String::from_utf8(out.stdout).unwrap();
-    assert!(text.starts_with("file,c_deg,gamma_deg,luminance_cd_m2\n"), "{text}");
-    assert_eq!(text.lines().count(), 1 + 2 * 2, "{text}");
+    assert!(
+        text.starts_with("file,c_deg,gamma_deg,luminance_cd_m2,error\n"),
+        "{text}"
+    );
+    assert_eq!(text.lines().count(), 1 + 2 * 2 + 1, "{text}");
+    assert!(text.lines().any(|l| l.contains("c.ies") && !l.ends_with(',')), "{text}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

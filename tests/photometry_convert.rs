@@ -270,3 +270,49 @@ fn cli_converts_a_folder_into_one_table_and_continues_past_a_bad_file() {
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains(".ies or .ldt"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_written_fields_read_by_hand() {
+    // IES symmetric about C90–C270, stored C90, C180, C270 with 10, 20, 30 cd: mirrored, C0 holds
+    // C180's 20 cd. EULUMDAT Isym 3 stores C270, C0, C90 in that order (lines 28 ff.), in cd/klm of
+    // the luminaire's own flux (absolute photometry: a negative lamp count).
+    let ies = "IESNA:LM-63-2002\n[TEST] t\nTILT=NONE\n1 -1 1 2 3 1 2 0.2 0.6 0\n1 1 10\n0 90\n90 180 270\n10 10\n20 20\n30 30\n";
+    let p = load_from_text(ies, "sym.ies", &LoadOptions::default()).unwrap();
+    let c = to_ldt(&p, "sym.ldt").unwrap();
+    let l: Vec<&str> = c.text.split("\r\n").collect();
+    assert_eq!(
+        (l[2], l[3], l[4], l[5], l[6]),
+        ("3", "4", "90", "2", "90"),
+        "Isym, Mc, Dc, Ng, Dg"
+    );
+    // Lines 16–17: luminous area length (Y) = the IES width 0.2 m, width (X) = the IES length 0.6 m.
+    assert_eq!((l[15], l[16]), ("200", "600"));
+    assert_eq!(l[25], "1", "one lamp set");
+    assert!(
+        l[26].starts_with('-'),
+        "absolute photometry: negative lamp count, {}",
+        l[26]
+    );
+    let flux: f64 = l[28].parse().unwrap();
+    assert!((flux - p.flux_lm()).abs() < 1e-3 * flux);
+    let (c0, ng) = (42, 2);
+    assert_eq!(&l[c0..c0 + 4], &["0", "90", "180", "270"], "C angles");
+    assert_eq!(&l[c0 + 4..c0 + 4 + ng], &["0", "90"], "γ angles");
+    let cd = |k: usize| l[c0 + 6 + k].parse::<f64>().unwrap() * flux / 1000.0;
+    for (block, want) in [(0, 30.0), (1, 20.0), (2, 10.0)] {
+        assert!(
+            (cd(block * ng) - want).abs() < 1e-4,
+            "stored block {block}: {} cd, want {want}",
+            cd(block * ng)
+        );
+    }
+    assert_eq!(l.len(), c0 + 6 + 3 * ng + 1, "three stored planes and a final line end");
+    // And back to IES: horizontal angles 90, 180, 270 with their values; width 0.2, length 0.6.
+    let back = to_ies(&load_from_text(&c.text, "sym.ldt", &LoadOptions::default()).unwrap()).unwrap();
+    let t: Vec<&str> = back.text.split("\r\n").collect();
+    let tilt = t.iter().position(|x| *x == "TILT=NONE").unwrap();
+    let line10: Vec<&str> = t[tilt + 1].split(' ').collect();
+    assert_eq!((line10[3], line10[4], line10[7], line10[8]), ("2", "3", "0.2", "0.6"));
+    assert_eq!(t[tilt + 4], "90 180 270");
+    assert_eq!(&t[tilt + 5..tilt + 8], &["10 10", "20 20", "30 30"]);
+}

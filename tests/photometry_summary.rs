@@ -83,11 +83,11 @@ fn cosine_power_distributions() {
         close(code.n1, frac(1), 0.05, "N1");
         close(code.n2, frac(2), 0.05, "N2");
         close(code.n3, frac(3), 0.05, "N3");
-        close(code.n4, 80.0, 0.1, "N4");
-        close(code.n5, 80.0, 0.1, "N5");
+        close(code.n4, 100.0, 0.1, "N4: all of the luminaire's flux goes down");
+        close(code.n5, 80.0, 0.1, "N5 = LOR");
         if n == 1.0 {
             // Lambertian: sin² of the cone angles, 43.75, 75, 93.75 %.
-            assert_eq!(code.text(), "44 75 94 80 80");
+            assert_eq!(code.text(), "44 75 94 100 80");
         }
     }
 }
@@ -123,6 +123,48 @@ fn uniform_distributions() {
         close(sp.field_deg.unwrap(), 180.0, 1e-3, "hemisphere field");
     }
     assert_eq!(s.cie_flux_code.unwrap().text(), "25 50 75 100 100");
+}
+
+#[test]
+fn uplights_and_batwings() {
+    // An uplight: I0·cos⁴(180° − γ) above the horizon. The beam runs through the zenith.
+    let n = 4.0;
+    let p = rotational(
+        |g| {
+            if g >= 90.0 {
+                1000.0 * (180.0 - g).to_radians().cos().powf(n)
+            } else {
+                0.0
+            }
+        },
+        180.0,
+        3000.0,
+    );
+    let s = p.summary();
+    let beam = 2.0 * 0.5f64.powf(1.0 / n).acos().to_degrees();
+    for sp in &s.spreads {
+        close(sp.beam_deg.unwrap(), beam, 0.02, &format!("uplight beam, {}", sp.plane));
+        let [a, b] = sp.beam_edges_deg.unwrap();
+        close(a.abs(), 180.0 - beam / 2.0, 0.02, "edge beyond the zenith");
+        close(b.abs(), 180.0 - beam / 2.0, 0.02, "edge before the zenith");
+    }
+    close(s.dlor.unwrap(), 0.0, 1e-12, "DLOR");
+    // A batwing: lobes at ±30°, 60 % at the nadir (and at 90°): both lobes lie within the beam.
+    let bat = |nadir: f64| {
+        move |g: f64| {
+            if g > 90.0 {
+                0.0
+            } else {
+                nadir + (1.0 - nadir) * (-((g - 30.0) / 12.0).powi(2)).exp()
+            }
+        }
+    };
+    let wide = rotational(bat(0.6), 180.0, 10.0).summary();
+    let deep = rotational(bat(0.3), 180.0, 10.0).summary();
+    let (w, d) = (wide.spreads[0].beam_deg.unwrap(), deep.spreads[0].beam_deg.unwrap());
+    assert!(w > 90.0, "wide batwing: both lobes, {w}°");
+    // Deeper than 50 % at the nadir: the beam is the lobe about the maximum nearest the nadir.
+    assert!(d < 45.0, "deep batwing: one lobe, {d}°");
 }
 
 #[test]

@@ -10,6 +10,7 @@ pub mod layout;
 pub mod manifest;
 pub mod pack;
 pub mod proxy;
+pub mod raykde;
 pub mod rayset;
 pub mod scanfile;
 pub mod select;

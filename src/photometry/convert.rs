@@ -145,7 +145,14 @@ fn ies_dimensions(o: &LuminousOpening, lost: &mut Vec<String>) -> ([f64; 3], Opt
     let (x, y, h) = (o.size_x_m, o.size_y_m, o.height_m);
     let sides = o.side_heights_m;
     let equal = sides.iter().all(|s| (s - sides[0]).abs() < 1e-12);
-    let mean = sides.iter().sum::<f64>() / 4.0;
+    // One height for four faces: the one that keeps their total area (each face spans the other
+    // axis: the C0/C180 faces Y, the C90/C270 faces X).
+    let perimeter = 2.0 * (x + y);
+    let mean = if perimeter > 0.0 {
+        ((sides[0] + sides[2]) * y + (sides[1] + sides[3]) * x) / perimeter
+    } else {
+        sides.iter().sum::<f64>() / 4.0
+    };
     match o.shape {
         OpeningShape::Point => ([0.0; 3], None),
         OpeningShape::Rectangle => ([y, x, 0.0], None),
@@ -165,7 +172,8 @@ fn ies_dimensions(o: &LuminousOpening, lost: &mut Vec<String>) -> ([f64; 3], Opt
             } else {
                 lost.push(format!(
                     "unequal side heights (C0 {} m, C90 {} m, C180 {} m, C270 {} m): IES has one height; written \
-                     as {} m (their mean), the four heights kept in [{SIDE_HEIGHTS_KEYWORD}] for lumiview",
+                     as {} m (the height of equal total side area), the four heights kept in \
+                     [{SIDE_HEIGHTS_KEYWORD}] for lumiview",
                     sides[0],
                     sides[1],
                     sides[2],
@@ -225,7 +233,7 @@ pub fn to_ies(p: &Photometry) -> Result<Converted, PhotometryError> {
         }
     }
     if let RawFile::Ldt(f) = &p.raw {
-        let set = f.lamp_sets.first();
+        let set = f.lamp_sets.get(p.lamp_set_index);
         if let Some(s) = set {
             if !s.colour.trim().is_empty() {
                 out.push(kw("_COLOUR", &s.colour));
@@ -248,6 +256,36 @@ pub fn to_ies(p: &Photometry) -> Result<Converted, PhotometryError> {
                 "tilt of the luminaire during measurement ({}°) has no IES field",
                 f.measurement_tilt_deg
             ));
+        }
+    }
+    if let RawFile::Ies(f) = &p.raw {
+        let written = [
+            "TEST",
+            "TESTLAB",
+            "ISSUEDATE",
+            "MANUFAC",
+            "LUMCAT",
+            "LUMINAIRE",
+            "LAMPCAT",
+            "LAMP",
+            "BALLAST",
+            "BALLASTCAT",
+            "TESTDATE",
+            "DISTRIBUTION",
+            "OTHER",
+            "SEARCH",
+        ];
+        let dropped: Vec<String> = f
+            .keywords
+            .iter()
+            .filter(|(k, _)| !written.iter().any(|w| w.eq_ignore_ascii_case(k)))
+            .map(|(k, _)| format!("[{k}]"))
+            .collect();
+        if !dropped.is_empty() {
+            lost.push(format!("keywords not carried over: {}", dropped.join(", ")));
+        }
+        if !f.labels.is_empty() {
+            lost.push(format!("{} free label line(s) of the 1986/1991 header", f.labels.len()));
         }
     }
     out.push(kw("FILEGENINFO", &format!("converted by lumiview from {src_name}")));
@@ -489,7 +527,7 @@ pub fn to_ldt(p: &Photometry, file_name: &str) -> Result<Converted, PhotometryEr
         RawFile::Ldt(f) => Some(f.as_ref()),
         RawFile::Ies(_) => None,
     };
-    let set = ldt.and_then(|f| f.lamp_sets.first());
+    let set = ldt.and_then(|f| f.lamp_sets.get(p.lamp_set_index));
     let mm = |m: f64| num(m * 1000.0);
     let mut l: Vec<String> = Vec::new();
     l.push(one_line(label(p, &["company", "MANUFAC"]).unwrap_or("lumiview"), 78));
@@ -510,10 +548,11 @@ pub fn to_ldt(p: &Photometry, file_name: &str) -> Result<Converted, PhotometryEr
         78,
     ));
     match p.luminaire_size_m {
-        // Luminaire length along Y, width along X.
+        // Luminaire length along Y, width along X; a round EULUMDAT housing keeps its width 0.
         Some([x, y, z]) => {
+            let round = ldt.is_some_and(|f| f.luminaire_mm[1] == 0.0);
             l.push(mm(y));
-            l.push(mm(x));
+            l.push(if round { "0".to_string() } else { mm(x) });
             l.push(mm(z));
         }
         None => {

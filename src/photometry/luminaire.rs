@@ -81,6 +81,8 @@ pub struct Photometry {
     pub native_size: (usize, usize),
     /// Number of lamps as written (EULUMDAT: of the chosen set; negative means absolute).
     pub lamp_count: f64,
+    /// The EULUMDAT lamp set in use (0-based, `LoadOptions::lamp_set`); 0 for IES files.
+    pub lamp_set_index: usize,
     /// Total rated lamp flux in lm, `None` for absolute photometry.
     pub lamp_flux_lm: Option<f64>,
     /// The factor applied to stored values to get cd (IES: multiplier × ballast factor ×
@@ -330,6 +332,7 @@ pub fn from_ies(f: IesFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         symmetry,
         native_size: (f.horizontal_deg.len(), f.vertical_deg.len()),
         lamp_count: f.lamp_count,
+        lamp_set_index: 0,
         lamp_flux_lm,
         candela_scale: scale,
         multiplier: f.multiplier,
@@ -613,6 +616,7 @@ pub fn from_ldt(f: LdtFile, name: &str, opts: &LoadOptions) -> Result<Photometry
         symmetry,
         native_size: (stored.len(), ng),
         lamp_count: set.count,
+        lamp_set_index: opts.lamp_set,
         lamp_flux_lm: (!absolute).then_some(set.flux_lm),
         candela_scale: scale,
         multiplier: f.conversion_factor,

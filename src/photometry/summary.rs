@@ -11,9 +11,10 @@
 //! - **Zonal lumens**: the flux in γ bands, integrated exactly for the bilinear web
 //!   ([`PhotometricWeb::flux_between`]).
 //! - **CIE flux code** (CIE 52): N1, N2, N3 = the flux in the cones of solid angle π/2, π and 3π/2
-//!   about the nadir (half angles 41.41°, 60°, 75.52°) as per cent of the downward flux; N4 = DLOR,
-//!   N5 = LOR in per cent. For absolute photometry the luminaire's own flux stands in for the lamp
-//!   flux (LOR = 100 %).
+//!   about the nadir (half angles 41.41°, 60°, 75.52°) as per cent of the downward flux; N4 = the
+//!   downward share of the luminaire's flux (DLOR/LOR), N5 = LOR, in per cent, as manufacturers'
+//!   data sheets print it (a fully downward luminaire with LOR 64 % reads "… 100 64"). For absolute
+//!   photometry the luminaire's own flux stands in for the lamp flux (LOR = 100 %).
 
 use super::luminaire::{Photometry, RawFile};
 use super::web::{PhotometricType, PhotometricWeb, ANGLE_EPS};
@@ -81,11 +82,11 @@ pub struct CieFluxCode {
     pub n2: f64,
     /// Within 75.52° (3π/2), % of the downward flux.
     pub n3: f64,
-    /// Downward light output ratio, %.
+    /// Downward share of the luminaire's flux (DLOR / LOR), %.
     pub n4: f64,
     /// Light output ratio, %.
     pub n5: f64,
-    /// True when N4 and N5 refer to the luminaire's own flux (absolute photometry).
+    /// True when N5 refers to the luminaire's own flux (absolute photometry: LOR 100 %).
     pub per_luminaire_flux: bool,
 }
 
@@ -227,7 +228,7 @@ impl Photometry {
                 n1: 100.0 * web.flux_between(0.0, cie_cone_deg(1)) / down,
                 n2: 100.0 * web.flux_between(0.0, cie_cone_deg(2)) / down,
                 n3: 100.0 * web.flux_between(0.0, cie_cone_deg(3)) / down,
-                n4: 100.0 * down / basis,
+                n4: 100.0 * down / flux,
                 n5: 100.0 * flux / basis,
                 per_luminaire_flux: lamp.is_none(),
             }
@@ -249,11 +250,15 @@ impl Photometry {
 }
 
 /// Beam and field angle in the plane through C = `c_deg` and C = `c_deg` + 180.
+///
+/// The plane is a full circle of directions: signed angle s from the nadir, s ≥ 0 towards `c_deg`
+/// (γ = s), s < 0 towards `c_deg` + 180 (γ = −s); s = ±180 is the zenith. From the plane's maximum
+/// the walk goes both ways round the circle (through the zenith when it must: an uplight) to the
+/// first direction below the threshold.
 pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
     let (g0, g1) = web.gamma_range();
-    // Signed angle s from the nadir: s ≥ 0 towards c_deg (γ = s), s < 0 towards c_deg + 180
-    // (γ = −s). Samples at every γ node, plus a zero just outside the measured range, where the
-    // intensity drops to zero.
+    // Samples at every γ node, plus a zero just outside the measured range, where the intensity
+    // drops to zero; the plane is piecewise linear between them.
     let mut gammas: Vec<f64> = web.gamma_angles().to_vec();
     let just = 2.0 * ANGLE_EPS; // outside the measured range by more than `sample`'s tolerance
     if g1 < 180.0 - just {
@@ -265,16 +270,22 @@ pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
     if gammas[0] > 0.0 {
         gammas.insert(0, 0.0);
     }
+    if gammas[gammas.len() - 1] < 180.0 {
+        gammas.push(180.0);
+    }
     let c_back = c_deg + 180.0;
+    // The circle from the zenith on the back half (s just above −180) through the nadir to the
+    // zenith on the front half (s = 180); the zenith appears once.
     let mut pts: Vec<(f64, f64)> = Vec::with_capacity(2 * gammas.len());
     for &g in gammas.iter().rev() {
-        if g > 0.0 {
+        if g > 0.0 && g < 180.0 {
             pts.push((-g, web.sample(c_back, g)));
         }
     }
     for &g in &gammas {
         pts.push((g, web.sample(c_deg, g)));
     }
+    let n = pts.len();
     // The maximum; among equal values the one nearest the nadir.
     let mut imax = 0;
     for (i, &(s, v)) in pts.iter().enumerate() {
@@ -284,20 +295,52 @@ pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
         }
     }
     let max_cd = pts[imax].1;
+    // Angle of point `i` unwrapped relative to the start, walking `dir` (±1) steps round the circle.
+    let step_angle = |from: usize, dir: isize| -> f64 {
+        let to = (from as isize + dir).rem_euclid(n as isize) as usize;
+        let d = pts[to].0 - pts[from].0;
+        // Crossing the zenith: from s = 180 to s just above −180 (or back) is a small step.
+        if dir > 0 && d < 0.0 {
+            d + 360.0
+        } else if dir < 0 && d > 0.0 {
+            d - 360.0
+        } else {
+            d
+        }
+    };
+    let edge = |fraction: f64, dir: isize| -> Option<f64> {
+        let thr = fraction * max_cd;
+        let (mut i, mut angle) = (imax, pts[imax].0);
+        for _ in 0..n {
+            let j = (i as isize + dir).rem_euclid(n as isize) as usize;
+            let step = step_angle(i, dir);
+            if pts[j].1 < thr {
+                let t = (pts[i].1 - thr) / (pts[i].1 - pts[j].1);
+                return Some(angle + step * t);
+            }
+            angle += step;
+            i = j;
+            if (angle - pts[imax].0).abs() >= 360.0 {
+                return None;
+            }
+        }
+        None
+    };
     let edges = |fraction: f64| -> Option<[f64; 2]> {
         if max_cd <= 0.0 {
             return None;
         }
-        let thr = fraction * max_cd;
-        let cross = |a: (f64, f64), b: (f64, f64)| a.0 + (b.0 - a.0) * (a.1 - thr) / (a.1 - b.1);
-        let right = (imax + 1..pts.len())
-            .find(|&i| pts[i].1 < thr)
-            .map(|i| cross(pts[i - 1], pts[i]))?;
-        let left = (0..imax)
-            .rev()
-            .find(|&i| pts[i].1 < thr)
-            .map(|i| cross(pts[i + 1], pts[i]))?;
-        Some([left, right])
+        let right = edge(fraction, 1)?;
+        let left = edge(fraction, -1)?;
+        (right - left < 360.0).then_some([left, right])
+    };
+    let wrap = |a: f64| {
+        let w = (a + 180.0).rem_euclid(360.0) - 180.0;
+        if w <= -180.0 {
+            180.0
+        } else {
+            w
+        }
     };
     let beam = edges(0.5);
     let field = edges(0.1);
@@ -308,9 +351,9 @@ pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
         max_cd,
         max_at_deg: pts[imax].0,
         beam_deg: beam.map(|[a, b]| b - a),
-        beam_edges_deg: beam,
+        beam_edges_deg: beam.map(|[a, b]| [wrap(a), wrap(b)]),
         field_deg: field.map(|[a, b]| b - a),
-        field_edges_deg: field,
+        field_edges_deg: field.map(|[a, b]| [wrap(a), wrap(b)]),
     }
 }
 
@@ -374,5 +417,22 @@ mod tests {
         assert!((s.beam_deg.unwrap() - 90.0).abs() < 1e-9, "{s:?}");
         assert!((s.field_deg.unwrap() - 98.0).abs() < 1e-9, "{s:?}");
         assert_eq!(s.max_at_deg, 0.0);
+    }
+
+    #[test]
+    fn an_uplight_spreads_through_the_zenith() {
+        // 100 cd within 40° of the zenith, 0 from 50°: the beam is 90° wide about s = ±180.
+        let g: Vec<f64> = (0..=18).map(|i| f64::from(i) * 10.0).collect();
+        let v: Vec<f64> = g.iter().map(|&x| if x >= 140.0 { 100.0 } else { 0.0 }).collect();
+        let cd: Vec<f64> = v.iter().chain(&v).copied().collect();
+        let web = PhotometricWeb::from_grid(vec![0.0, 360.0], g, cd).unwrap();
+        let s = plane_spread(&web, 90.0);
+        assert!((s.beam_deg.unwrap() - 90.0).abs() < 1e-9, "{s:?}");
+        assert!((s.field_deg.unwrap() - 98.0).abs() < 1e-9, "{s:?}");
+        let [a, b] = s.beam_edges_deg.unwrap();
+        assert!(
+            (a.abs() - 135.0).abs() < 1e-9 && (b.abs() - 135.0).abs() < 1e-9,
+            "{a} {b}"
+        );
     }
 }

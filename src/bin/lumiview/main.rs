@@ -62,8 +62,8 @@ enum Command {
     },
     /// Luminance table of the luminous opening in cd/m² (default: C 0–345 step 15, γ 65–85 step 5,
     /// the glare-rating grid).
-    /// Several files or a folder: one CSV table `file,c_deg,gamma_deg,luminance_cd_m2` (JSON lines
-    /// with --json), continuing past a bad file.
+    /// Several files or a folder: one CSV table `file,c_deg,gamma_deg,luminance_cd_m2,error` (JSON
+    /// lines with --json), continuing past a bad file.
     Luminance {
         /// IES or EULUMDAT files, or folders of them.
         #[arg(required = true)]

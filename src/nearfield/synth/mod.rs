@@ -18,6 +18,7 @@
 //! Every luminaire here emits downwards (into z < its emitting plane) unless stated. The geometry,
 //! luminance functions and formulas are written out in docs/synthetic.md.
 
+pub mod emit;
 mod luminaires;
 pub mod proxy;
 pub mod raycast;

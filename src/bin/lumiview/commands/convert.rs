@@ -100,6 +100,9 @@ pub fn convert(a: &ConvertArgs) -> CliResult {
             .transpose()?;
     let inputs = expand_inputs(&a.files)?;
     let several = inputs.len() > 1 || a.files.iter().any(|f| f.is_dir());
+    // Outputs never replace inputs: every input, by its canonical path.
+    let protected: Vec<PathBuf> = inputs.iter().filter_map(|p| std::fs::canonicalize(p).ok()).collect();
+    let is_input = |out: &Path| std::fs::canonicalize(out).ok().is_some_and(|c| protected.contains(&c));
     if !several && !a.output.is_dir() {
         let target = Target::of_path(&a.output).ok_or_else(|| {
             format!(
@@ -120,6 +123,13 @@ pub fn convert(a: &ConvertArgs) -> CliResult {
             eprintln!("lumiview: warning: {w}");
         }
         let c = convert_one(&p, target, &a.output)?;
+        if is_input(&a.output) {
+            return Err(format!(
+                "{}: the output is the input file itself; choose another output name",
+                a.output.display()
+            )
+            .into());
+        }
         write_output(&inputs[0], &a.output, &c.text)?;
         for l in &c.lost {
             eprintln!("lumiview: not kept: {l}");
@@ -169,6 +179,13 @@ pub fn convert(a: &ConvertArgs) -> CliResult {
                     "{} was already written from {} in this run; rename one of the inputs",
                     path.display(),
                     from.display()
+                )
+                .into());
+            }
+            if is_input(&path) {
+                return Err(format!(
+                    "{} is one of the inputs of this run and is not replaced (write into another folder)",
+                    path.display()
                 )
                 .into());
             }

@@ -27,10 +27,10 @@ pub struct IsoluxArgs {
     /// Grid spacing, metres (default: extent / 100, i.e. 201 × 201 points).
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub step: Option<f64>,
-    /// Image width in pixels for .png and .svg (the height follows from the layout, about 1.2 ×
-    /// the width); ignored for .csv.
-    #[arg(long, value_name = "PX", default_value_t = 800)]
-    pub size: u32,
+    /// Image width in pixels for .png and .svg (default 800; the height follows from the layout,
+    /// about 1.2 × the width).
+    #[arg(long, value_name = "PX")]
+    pub size: Option<u32>,
     /// Draw only the isolux lines, without the false-colour fill and its colour bar.
     #[arg(long)]
     pub no_fill: bool,
@@ -81,12 +81,20 @@ pub fn isolux(args: &IsoluxArgs) -> CliResult {
     let height_m = positive_metres("--height", args.height)?;
     let extent_m = args.extent.map(|v| positive_metres("--extent", v)).transpose()?;
     let step_m = args.step.map(|v| positive_metres("--step", v)).transpose()?;
-    if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&args.size) {
-        return Err(format!(
-            "--size {}: must be within {MIN_SIZE_PX}…{MAX_SIZE_PX} pixels",
-            args.size
-        )
-        .into());
+    if kind == Output::Csv {
+        for (given, name) in [(args.size.is_some(), "--size"), (args.no_fill, "--no-fill")] {
+            if given {
+                return Err(format!(
+                    "{name} applies to the .png and .svg diagram; {} is the grid as CSV",
+                    args.output.display()
+                )
+                .into());
+            }
+        }
+    }
+    let size = args.size.unwrap_or(800);
+    if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&size) {
+        return Err(format!("--size {size}: must be within {MIN_SIZE_PX}…{MAX_SIZE_PX} pixels").into());
     }
     let p = super::load(&args.file, &args.load)?;
     let opts = IsoluxOptions {
@@ -108,7 +116,7 @@ pub fn isolux(args: &IsoluxArgs) -> CliResult {
             .map_err(|e| format!("{}: cannot write file: {e}", args.output.display()))?,
         Output::Diagram => {
             let plot_opts = IsoluxPlotOptions {
-                size_px: args.size,
+                size_px: size,
                 fill: !args.no_fill,
             };
             write_isolux(&p, &grid, &plot_opts, &args.output)?;

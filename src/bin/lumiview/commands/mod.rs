@@ -304,8 +304,8 @@ pub fn sample(file: &Path, at: &[String], as_json: bool, args: &LoadArgs) -> Cli
 }
 
 /// `lumiview luminance FILE…`: one file prints a table (text or JSON); several files or a folder
-/// write one CSV table `file,c_deg,gamma_deg,luminance_cd_m2` (JSON lines with `--json`),
-/// continuing past a file that cannot be read.
+/// write one CSV table `file,c_deg,gamma_deg,luminance_cd_m2,error` (JSON lines with `--json`),
+/// continuing past a file that cannot be read (one row naming it, with the error).
 pub fn luminance(files: &[PathBuf], as_json: bool, c: &str, gamma: &str, args: &LoadArgs) -> CliResult {
     let cs = angle_range(c, "c")?;
     let gs = angle_range(gamma, "gamma")?;
@@ -342,7 +342,7 @@ pub fn luminance(files: &[PathBuf], as_json: bool, c: &str, gamma: &str, args: &
     let mut out = String::new();
     if inputs.len() > 1 || files.iter().any(|f| f.is_dir()) {
         if !as_json {
-            outln!(out, "file,c_deg,gamma_deg,luminance_cd_m2");
+            outln!(out, "file,c_deg,gamma_deg,luminance_cd_m2,error");
         }
         let mut failed = 0usize;
         for file in &inputs {
@@ -359,7 +359,7 @@ pub fn luminance(files: &[PathBuf], as_json: bool, c: &str, gamma: &str, args: &
                             outln!(
                                 out,
                                 "{}",
-                                csv_row([p.source.clone(), format!("{c}"), format!("{g}"), v])
+                                csv_row([p.source.clone(), format!("{c}"), format!("{g}"), v, String::new()])
                             );
                         }
                     }
@@ -373,6 +373,15 @@ pub fn luminance(files: &[PathBuf], as_json: bool, c: &str, gamma: &str, args: &
                             "{}",
                             json!({"file": file.display().to_string(), "error": e.to_string()})
                         );
+                    } else {
+                        let row = [
+                            file.display().to_string(),
+                            String::new(),
+                            String::new(),
+                            String::new(),
+                            e.to_string(),
+                        ];
+                        outln!(out, "{}", csv_row(row));
                     }
                 }
             }

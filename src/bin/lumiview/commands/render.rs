@@ -62,13 +62,8 @@ pub struct RenderArgs {
     /// sRGB), so stills of different luminaires compare: the default 1e-3 shows 1000 cd/m² as 50 %
     /// grey. `auto` exposes each view for itself (1 / the luminance seen, or a scan's 99th
     /// percentile).
-    #[arg(
-        long,
-        default_value = "1e-3",
-        value_name = "M2_PER_CD|auto",
-        allow_hyphen_values = true
-    )]
-    pub exposure: String,
+    #[arg(long, value_name = "M2_PER_CD|auto", allow_hyphen_values = true)]
+    pub exposure: Option<String>,
     /// Keep the PNG's alpha channel (coverage: transparent where there is no luminaire); the
     /// default is an opaque black background, the luminance of empty space.
     #[arg(long)]
@@ -118,6 +113,9 @@ fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
     }
 }
 
+/// The default exposure of a PNG still, m²/cd: 1000 cd/m² shows as 50 % grey.
+const DEFAULT_EXPOSURE: f32 = 1e-3;
+
 /// `--exposure`: a positive finite value in m²/cd, or `auto` (`None`).
 fn parse_exposure(s: &str) -> Result<Option<f32>, String> {
     if s.eq_ignore_ascii_case("auto") {
@@ -161,7 +159,10 @@ pub fn render(a: &RenderArgs) -> CliResult {
     }
     let camera = a.camera.as_deref().map(parse_camera).transpose()?;
     let mode = parse_mode(&a.mode)?;
-    let exposure_arg = parse_exposure(&a.exposure)?;
+    let exposure_arg = match &a.exposure {
+        Some(e) => parse_exposure(e)?,
+        None => Some(DEFAULT_EXPOSURE),
+    };
     let ext = a
         .output
         .extension()
@@ -172,11 +173,14 @@ pub fn render(a: &RenderArgs) -> CliResult {
         Some("exr") => true,
         _ => return Err(format!("{}: the output must end in .png or .exr", a.output.display()).into()),
     };
+    if a.legend && w < 160 {
+        return Err(format!("--legend needs a still at least 160 px wide (--size {})", a.size).into());
+    }
     if exr {
         for (given, name) in [
             (a.transparent, "--transparent"),
             (a.legend, "--legend"),
-            (a.exposure != "1e-3", "--exposure"),
+            (a.exposure.is_some(), "--exposure"),
         ] {
             if given {
                 return Err(format!(
@@ -334,7 +338,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
     let (exposure, exposure_note) = match exposure_arg {
         Some(e) => (
             e,
-            if a.exposure == "1e-3" {
+            if a.exposure.is_none() {
                 "default: 1000 cd/m² shows as 50 % grey"
             } else {
                 "as given"

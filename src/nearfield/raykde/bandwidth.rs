@@ -1,0 +1,452 @@
+//! The angular half of the ray-file estimate and the virtual camera layout: a histogram of the ray
+//! directions on a fine Fibonacci grid, the k-nearest-neighbour angle holding k_a rays about any
+//! direction, cameras placed at about half that spacing, and each camera's rays found through the
+//! grid cells near it.
+
+use std::f64::consts::PI;
+use std::path::Path;
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::hull::SourceCloud;
+use super::{KdeOptions, DEFAULT_B, MAX_CAMERAS, MAX_TOTAL_PIXELS};
+use crate::nearfield::binning::NearestDirection;
+use crate::nearfield::error::{NearfieldError, Result};
+
+/// Access to ray `i`: origin (m), unit direction, luminous flux (lm); `None` to skip it.
+pub type RayGet<'a> = &'a (dyn Fn(usize) -> Option<(DVec3, DVec3, f64)> + Sync);
+
+/// Angle bins of the k-nearest-neighbour search (0…π).
+const ANGLE_BINS: usize = 1024;
+
+/// Directions at which the angular width is computed exactly for the layout (the others take
+/// their nearest one's).
+const COARSE_DIRECTIONS: usize = 3000;
+
+/// Normalisation of the spherical Epanechnikov kernel K(θ) = c · (1 − (θ/h)²), θ < h, so that
+/// ∫ K dω = 1 over the sphere: c = 1 / (2π (1 − 2 sin h / h + 2 (1 − cos h) / h²)) (1/sr).
+pub fn angular_kernel(h: f64) -> f64 {
+    let i = if h < 1e-3 {
+        h * h / 4.0 - h.powi(4) / 72.0
+    } else {
+        1.0 - 2.0 * h.sin() / h + 2.0 * (1.0 - h.cos()) / (h * h)
+    };
+    1.0 / (2.0 * PI * i)
+}
+
+/// Fibonacci directions on the unit sphere.
+pub fn fibonacci(n: usize) -> Vec<DVec3> {
+    let golden = PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+/// Counts of a ray set.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RaySummary {
+    /// Rays (indices 0…n−1 of the accessor).
+    pub n: usize,
+    /// Effective rays, (Σ Φ)² / Σ Φ².
+    pub n_eff: f64,
+    /// Σ luminous flux (lm).
+    pub flux_lm: f64,
+}
+
+/// The direction histogram and the widths chosen from it.
+#[derive(Debug, Clone)]
+pub struct Bandwidths {
+    /// Rays per spatial kernel k_s.
+    pub rays_per_kernel: f64,
+    /// Rays per angular kernel k_a.
+    pub rays_per_angular_kernel: f64,
+    fine: NearestDirection,
+    fine_dirs: Vec<DVec3>,
+    /// Effective rays per fine cell.
+    counts: Vec<f64>,
+    /// Fine cells holding rays.
+    lit: Vec<usize>,
+    /// Angular radius of a fine cell (rad).
+    cell_radius: f64,
+    /// Narrowest and widest angular half-width allowed (rad).
+    h_min: f64,
+    h_max: f64,
+    /// The angular width at the coarse directions, and those directions.
+    coarse: NearestDirection,
+    coarse_h: Vec<f64>,
+    /// Effective rays, (Σ Φ)² / Σ Φ².
+    n_eff: f64,
+    /// Mean flux per effective ray (lm).
+    flux_per_ray: f64,
+    source_radius: f64,
+}
+
+/// Where the virtual cameras sit and what they see.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    /// Unit directions from the sphere's centre to the cameras.
+    pub directions: Vec<DVec3>,
+    /// Capture sphere radius (m).
+    pub radius_m: f64,
+    /// Full field of view (degrees).
+    pub fov_deg: f64,
+    /// Image side (px).
+    pub image_px: u32,
+}
+
+/// Each fine cell's rays (compressed rows).
+#[derive(Debug, Clone)]
+pub struct CellRays {
+    starts: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl Bandwidths {
+    /// Builds the direction histogram of the rays (`get`, `n` of them) and chooses k_s and k_a
+    /// (module docs of `raykde`).
+    ///
+    /// # Errors
+    /// [`NearfieldError::InvalidArgument`] when the ray set is too small to estimate anything.
+    pub fn choose(
+        get: RayGet<'_>,
+        rays: RaySummary,
+        opts: &KdeOptions,
+        source: &SourceCloud,
+        warnings: &mut Vec<String>,
+        path: &Path,
+    ) -> Result<Self> {
+        let RaySummary {
+            n,
+            n_eff,
+            flux_lm: flux,
+        } = rays;
+        if n_eff < 16.0 {
+            return Err(NearfieldError::invalid(
+                "rays",
+                format!(
+                    "{}: {n_eff:.1} effective rays: too few to estimate a luminance",
+                    path.display()
+                ),
+            ));
+        }
+        let k_s = opts
+            .rays_per_kernel
+            .unwrap_or(DEFAULT_B * n_eff.sqrt())
+            .min(n_eff / 4.0)
+            .max(1.0);
+        let k_a = (k_s * n_eff).sqrt().clamp(k_s, n_eff);
+        let n_fine = ((n_eff / 8.0) as usize).clamp(2000, 40_000);
+        let fine_dirs = fibonacci(n_fine);
+        let fine = NearestDirection::new(&fine_dirs);
+        let flux_per_ray = flux / n_eff;
+        let counts = (0..n)
+            .into_par_iter()
+            .fold(
+                || vec![0.0f64; n_fine],
+                |mut acc, i| {
+                    if let Some((_, k, f)) = get(i) {
+                        if let Some(j) = fine.nearest(k) {
+                            acc[j] += f / flux_per_ray;
+                        }
+                    }
+                    acc
+                },
+            )
+            .reduce(
+                || vec![0.0f64; n_fine],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
+        let lit: Vec<usize> = (0..n_fine).filter(|&j| counts[j] > 0.0).collect();
+        let cell_radius = (4.0 * PI / n_fine as f64 / PI).sqrt() * 1.2;
+        let coarse_dirs = fibonacci(COARSE_DIRECTIONS);
+        let mut me = Self {
+            rays_per_kernel: k_s,
+            rays_per_angular_kernel: k_a,
+            fine,
+            fine_dirs,
+            counts,
+            lit,
+            cell_radius,
+            h_min: 1.5 * cell_radius,
+            h_max: PI / 2.0,
+            coarse: NearestDirection::new(&coarse_dirs),
+            coarse_h: Vec::new(),
+            n_eff,
+            flux_per_ray,
+            source_radius: source.radius,
+        };
+        let raw: Vec<(f64, f64)> = coarse_dirs.par_iter().map(|d| me.knn_angle(*d)).collect();
+        // Cap: three times the flux-weighted median width of the lit directions.
+        let mut lit_h: Vec<(f64, f64)> = raw.iter().filter(|(_, w)| *w > 0.0).copied().collect();
+        lit_h.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let total: f64 = lit_h.iter().map(|p| p.1).sum();
+        let mut acc = 0.0;
+        let mut median = PI / 4.0;
+        for (h, w) in &lit_h {
+            acc += w;
+            if acc >= total / 2.0 {
+                median = *h;
+                break;
+            }
+        }
+        me.h_max = (3.0 * median).clamp(me.h_min, PI / 2.0);
+        me.coarse_h = raw.iter().map(|(h, _)| h.clamp(me.h_min, me.h_max)).collect();
+        if n_eff < 1000.0 {
+            warnings.push(format!(
+                "{}: {n_eff:.0} effective rays: the estimate is very coarse (kernels of {k_s:.0} rays)",
+                path.display()
+            ));
+        }
+        Ok(me)
+    }
+
+    /// The k-nearest-neighbour angle about `d` holding k_a rays (rad), and the rays within the
+    /// fine cell nearest `d` (a weight for medians over directions).
+    fn knn_angle(&self, d: DVec3) -> (f64, f64) {
+        let mut hist = [0.0f64; ANGLE_BINS];
+        for &j in &self.lit {
+            let a = d.dot(self.fine_dirs[j]).clamp(-1.0, 1.0).acos();
+            let b = ((a / PI) * ANGLE_BINS as f64) as usize;
+            hist[b.min(ANGLE_BINS - 1)] += self.counts[j];
+        }
+        let mut acc = 0.0;
+        for (b, c) in hist.iter().enumerate() {
+            if acc + c >= self.rays_per_angular_kernel {
+                let t = if *c > 0.0 {
+                    (self.rays_per_angular_kernel - acc) / c
+                } else {
+                    1.0
+                };
+                let h = (b as f64 + t) * PI / ANGLE_BINS as f64;
+                let own = self.fine.nearest(d).map_or(0.0, |j| self.counts[j]);
+                return (h, own);
+            }
+            acc += c;
+        }
+        (PI, 0.0)
+    }
+
+    /// The angular half-width at direction `d` (rad): the given one, or the k-nearest-neighbour
+    /// angle within [h_min, h_max].
+    pub fn angular_at(&self, d: DVec3, opts: &KdeOptions) -> f64 {
+        match opts.angular_kernel_deg {
+            Some(h) => h.to_radians(),
+            None => self.knn_angle(d).0.clamp(self.h_min, self.h_max),
+        }
+    }
+
+    /// The width the layout plans with at `d`: the nearest coarse direction's.
+    fn planned(&self, d: DVec3, opts: &KdeOptions) -> f64 {
+        match opts.angular_kernel_deg {
+            Some(h) => h.to_radians(),
+            None => self
+                .coarse
+                .nearest(d)
+                .and_then(|i| self.coarse_h.get(i).copied())
+                .unwrap_or(self.h_max),
+        }
+    }
+
+    /// The camera layout, capture radius, field of view and image size.
+    ///
+    /// # Errors
+    /// [`NearfieldError::InvalidArgument`] when the options ask for more than the limits hold.
+    pub fn layout(&self, opts: &KdeOptions) -> Result<Layout> {
+        let r_src = self.source_radius.max(5e-4);
+        let radius_m = opts.radius_m.unwrap_or((8.0 * r_src).max(1.1));
+        // Expected spatial σ: k_s of the k_a rays of a camera, spread over the source's disc.
+        let sigma = r_src * (self.rays_per_kernel / self.rays_per_angular_kernel).sqrt();
+        let half = r_src + 3.0 * sigma;
+        let fov_deg = 2.0 * (1.05 * half / radius_m).atan().to_degrees();
+        let image_px = opts
+            .image_px
+            .unwrap_or_else(|| ((2.0 * half / (sigma / 2.0)).ceil() as u32).clamp(32, 256));
+        let directions = match opts.cameras {
+            Some(m) => fibonacci(m),
+            None => self.adaptive_directions(opts, image_px),
+        };
+        let total = u64::from(image_px) * u64::from(image_px) * directions.len() as u64;
+        if directions.len() > MAX_CAMERAS || total > MAX_TOTAL_PIXELS {
+            return Err(NearfieldError::invalid(
+                "cameras",
+                format!(
+                    "{} cameras of {image_px}² px exceed the limits ({MAX_CAMERAS} cameras, {MAX_TOTAL_PIXELS} pixels)",
+                    directions.len()
+                ),
+            ));
+        }
+        Ok(Layout {
+            directions,
+            radius_m,
+            fov_deg,
+            image_px,
+        })
+    }
+
+    /// Cameras at about half the local angular width apart: a greedy variable-radius Poisson-disc
+    /// selection over the fine directions, narrowest widths first; spread wider when the limits
+    /// would be exceeded.
+    fn adaptive_directions(&self, opts: &KdeOptions, image_px: u32) -> Vec<DVec3> {
+        let limit = MAX_CAMERAS.min((MAX_TOTAL_PIXELS / (u64::from(image_px) * u64::from(image_px))) as usize);
+        let mut order: Vec<(f64, DVec3)> = self.fine_dirs.iter().map(|d| (self.planned(*d, opts), *d)).collect();
+        order.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut factor = 0.5;
+        loop {
+            let picked = poisson(&order, factor, limit);
+            if let Some(p) = picked {
+                if p.len() >= 12 {
+                    return p;
+                }
+                return fibonacci(12.max(p.len()));
+            }
+            factor *= 1.3;
+        }
+    }
+
+    /// Each fine cell's rays.
+    pub fn cell_rays(&self, get: RayGet<'_>, n: usize) -> CellRays {
+        let cell: Vec<u32> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                get(i)
+                    .and_then(|(_, k, _)| self.fine.nearest(k))
+                    .map_or(u32::MAX, |j| j as u32)
+            })
+            .collect();
+        let m = self.fine_dirs.len();
+        let mut starts = vec![0u32; m + 1];
+        for &c in &cell {
+            if c != u32::MAX {
+                starts[c as usize + 1] += 1;
+            }
+        }
+        for j in 0..m {
+            starts[j + 1] += starts[j];
+        }
+        let mut fill = starts.clone();
+        let mut items = vec![0u32; starts[m] as usize];
+        for (i, &c) in cell.iter().enumerate() {
+            if c != u32::MAX {
+                let slot = &mut fill[c as usize];
+                items[*slot as usize] = i as u32;
+                *slot += 1;
+            }
+        }
+        CellRays { starts, items }
+    }
+
+    /// The rays of the fine cells within `h` (plus a cell's radius) of `d`.
+    pub fn cells_within<'a>(&'a self, cells: &'a CellRays, d: DVec3, h: f64) -> impl Iterator<Item = u32> + 'a {
+        let cos = (h + self.cell_radius).min(PI).cos();
+        self.lit
+            .iter()
+            .filter(move |&&j| self.fine_dirs[j].dot(d) >= cos)
+            .flat_map(move |&j| {
+                let (s, e) = (cells.starts[j] as usize, cells.starts[j + 1] as usize);
+                cells.items[s..e].iter().copied()
+            })
+    }
+
+    /// Effective rays (Σ Φ)² / Σ Φ².
+    pub fn effective_rays(&self) -> f64 {
+        self.n_eff
+    }
+
+    /// Mean flux per effective ray (lm).
+    pub fn flux_per_ray(&self) -> f64 {
+        self.flux_per_ray
+    }
+}
+
+/// Greedy Poisson-disc selection: a direction is kept when no kept one lies within `factor` × its
+/// width. `None` when more than `limit` would be kept.
+fn poisson(order: &[(f64, DVec3)], factor: f64, limit: usize) -> Option<Vec<DVec3>> {
+    // A uniform grid over [−1, 1]³ of chord-sized cells finds the kept neighbours.
+    let min_h = order.first().map_or(0.1, |o| o.0) * factor;
+    let cell = (2.0 * (min_h / 2.0).sin()).max(1e-3);
+    let g = ((2.0 / cell).ceil() as usize).clamp(1, 256);
+    let key = |d: DVec3| {
+        let c = |x: f64| (((x + 1.0) / 2.0 * g as f64) as usize).min(g - 1);
+        (c(d.x), c(d.y), c(d.z))
+    };
+    let mut grid: std::collections::HashMap<(usize, usize, usize), Vec<usize>> = std::collections::HashMap::new();
+    let mut kept: Vec<DVec3> = Vec::new();
+    for &(h, d) in order {
+        let r = factor * h;
+        let chord = 2.0 * (r / 2.0).sin();
+        let span = ((chord / (2.0 / g as f64)).ceil() as isize).max(1);
+        let (cx, cy, cz) = key(d);
+        let mut free = true;
+        'search: for dx in -span..=span {
+            for dy in -span..=span {
+                for dz in -span..=span {
+                    let (x, y, z) = (cx as isize + dx, cy as isize + dy, cz as isize + dz);
+                    if x < 0 || y < 0 || z < 0 || x >= g as isize || y >= g as isize || z >= g as isize {
+                        continue;
+                    }
+                    if let Some(v) = grid.get(&(x as usize, y as usize, z as usize)) {
+                        if v.iter().any(|&k| (kept[k] - d).length() < chord) {
+                            free = false;
+                            break 'search;
+                        }
+                    }
+                }
+            }
+        }
+        if free {
+            grid.entry(key(d)).or_default().push(kept.len());
+            kept.push(d);
+            if kept.len() > limit {
+                return None;
+            }
+        }
+    }
+    Some(kept)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_angular_kernel_integrates_to_one() {
+        for h in [0.01f64, 0.2, 1.0, 2.5] {
+            let c = angular_kernel(h);
+            let n = 20_000;
+            let mut s = 0.0;
+            for i in 0..n {
+                let t = (i as f64 + 0.5) / n as f64 * h;
+                s += c * (1.0 - (t / h).powi(2)) * 2.0 * PI * t.sin() * h / n as f64;
+            }
+            assert!((s - 1.0).abs() < 1e-6, "h {h}: {s}");
+        }
+    }
+
+    #[test]
+    fn poisson_keeps_the_spacing() {
+        let d = fibonacci(4000);
+        let order: Vec<(f64, DVec3)> = d.iter().map(|v| (0.2, *v)).collect();
+        let kept = poisson(&order, 0.5, 10_000).unwrap();
+        for (i, a) in kept.iter().enumerate() {
+            for b in &kept[i + 1..] {
+                assert!(a.dot(*b).clamp(-1.0, 1.0).acos() >= 0.1 - 1e-9);
+            }
+        }
+        // About 4π / (spacing² · √3/2) directions.
+        let expect = 4.0 * PI / (0.1f64 * 0.1 * 0.866);
+        assert!(
+            (kept.len() as f64) > 0.4 * expect && (kept.len() as f64) < 1.2 * expect,
+            "{}",
+            kept.len()
+        );
+    }
+}

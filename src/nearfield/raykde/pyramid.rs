@@ -1,0 +1,358 @@
+//! The spatial half of the ray-file estimate: one camera's rays splatted into an image, then, per
+//! pixel, the finest level of an image pyramid whose neighbourhood holds `k_s` rays (a
+//! k-nearest-neighbour balloon estimator with a smooth, quantised-then-blended width).
+//!
+//! Level 0 is the bilinear splat (each ray shared among its four nearest pixel centres). Level k is
+//! level k−1 blurred by [1 2 1]/4 in x and y and summed over 2 × 2 blocks, so every level holds the
+//! same total; a level is read back at a base pixel by bilinear interpolation, divided by the 4^k base
+//! pixels a level-k pixel covers. The resulting kernel is close to a Gaussian of σ ≈
+//! [`LEVEL_SIGMA_PX`] · 2^k base pixels (measured in the tests); a kernel that size holds about
+//! `4π σ²` pixels' worth of rays, which is how a level's ray count is judged. Between two levels
+//! the estimate is blended by where k_s falls between their counts (in logarithms), so the width
+//! varies continuously.
+
+use glam::DVec2;
+
+/// σ in base pixels of the level-k kernel divided by 2^k (level 0's bilinear tent is narrower).
+pub const LEVEL_SIGMA_PX: f64 = 0.7;
+
+/// Pixels' worth of rays a kernel of σ = `LEVEL_SIGMA_PX` · 2^k holds, over 4^k: 4π σ² / 4^k.
+const AREA_FACTOR: f64 = 4.0 * std::f64::consts::PI * LEVEL_SIGMA_PX * LEVEL_SIGMA_PX;
+
+/// A camera's accumulation grids.
+#[derive(Debug, Clone)]
+pub struct Pyramid {
+    px: usize,
+    /// Σ flux · angular kernel per base pixel.
+    w: Vec<f64>,
+    /// Σ angular weight (rays, counted by their angular kernel weight) per base pixel.
+    c: Vec<f64>,
+}
+
+/// The per-pixel estimate of one camera.
+#[derive(Debug, Clone)]
+pub struct Estimate {
+    /// Σ flux · angular kernel per base pixel (divide by the pixel area for luminance).
+    pub density: Vec<f64>,
+    /// The level used per pixel (0 = finest); σ = `LEVEL_SIGMA_PX` · 2^level base pixels.
+    pub level: Vec<f32>,
+    /// Lit pixels whose kernel reached the top level without k_s rays.
+    pub undersampled: u64,
+    /// Σ of the splatted weights (the camera's rays, by angular weight).
+    pub total: f64,
+}
+
+/// One level: a square grid of side `n` with its values.
+struct Level {
+    n: usize,
+    w: Vec<f64>,
+    c: Vec<f64>,
+}
+
+impl Level {
+    /// Blurs by [1 2 1]/4 in x and y (clamped at the border: the total is kept) and sums 2 × 2.
+    fn down(&self) -> Level {
+        let n = self.n;
+        let blur = |v: &[f64]| -> Vec<f64> {
+            let mut t = vec![0.0; n * n];
+            for y in 0..n {
+                for x in 0..n {
+                    let a = v[y * n + x];
+                    if a == 0.0 {
+                        continue;
+                    }
+                    let xl = x.saturating_sub(1);
+                    let xr = (x + 1).min(n - 1);
+                    t[y * n + xl] += 0.25 * a;
+                    t[y * n + x] += 0.5 * a;
+                    t[y * n + xr] += 0.25 * a;
+                }
+            }
+            let mut u = vec![0.0; n * n];
+            for y in 0..n {
+                let yl = y.saturating_sub(1);
+                let yr = (y + 1).min(n - 1);
+                for x in 0..n {
+                    let a = t[y * n + x];
+                    if a == 0.0 {
+                        continue;
+                    }
+                    u[yl * n + x] += 0.25 * a;
+                    u[y * n + x] += 0.5 * a;
+                    u[yr * n + x] += 0.25 * a;
+                }
+            }
+            u
+        };
+        let m = n.div_ceil(2);
+        let sum = |v: &[f64]| -> Vec<f64> {
+            let b = blur(v);
+            let mut out = vec![0.0; m * m];
+            for y in 0..n {
+                for x in 0..n {
+                    out[(y / 2) * m + x / 2] += b[y * n + x];
+                }
+            }
+            out
+        };
+        Level {
+            n: m,
+            w: sum(&self.w),
+            c: sum(&self.c),
+        }
+    }
+
+    /// Bilinear read at base pixel centre (bx, by) of a level 2^k coarser, as per-base-pixel values.
+    fn read(&self, k: u32, bx: usize, by: usize) -> (f64, f64) {
+        let s = f64::from(1u32 << k);
+        let fx = ((bx as f64 + 0.5) / s - 0.5).clamp(0.0, (self.n - 1) as f64);
+        let fy = ((by as f64 + 0.5) / s - 0.5).clamp(0.0, (self.n - 1) as f64);
+        let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
+        let (x1, y1) = ((x0 + 1).min(self.n - 1), (y0 + 1).min(self.n - 1));
+        let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
+        let at = |v: &[f64], x: usize, y: usize| v[y * self.n + x];
+        let lerp = |v: &[f64]| {
+            let a = at(v, x0, y0) * (1.0 - tx) + at(v, x1, y0) * tx;
+            let b = at(v, x0, y1) * (1.0 - tx) + at(v, x1, y1) * tx;
+            a * (1.0 - ty) + b * ty
+        };
+        let area = s * s;
+        (lerp(&self.w) / area, lerp(&self.c))
+    }
+}
+
+impl Pyramid {
+    /// Empty grids of `px` × `px` base pixels.
+    pub fn new(px: u32) -> Self {
+        let px = px.max(1) as usize;
+        Self {
+            px,
+            w: vec![0.0; px * px],
+            c: vec![0.0; px * px],
+        }
+    }
+
+    /// Adds a ray at image position `uv` (pixels, origin at the top-left corner, pixel centres at
+    /// half integers) with weight `w` and count weight `c`, shared bilinearly among the four nearest
+    /// pixel centres. Positions outside the image are dropped.
+    pub fn splat(&mut self, uv: DVec2, w: f64, c: f64) {
+        let (fx, fy) = (uv.x - 0.5, uv.y - 0.5);
+        let n = self.px as f64;
+        if !(fx > -1.0 && fy > -1.0 && fx < n && fy < n) {
+            return;
+        }
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        for (dx, dy, k) in [
+            (0.0, 0.0, (1.0 - tx) * (1.0 - ty)),
+            (1.0, 0.0, tx * (1.0 - ty)),
+            (0.0, 1.0, (1.0 - tx) * ty),
+            (1.0, 1.0, tx * ty),
+        ] {
+            let (x, y) = (x0 + dx, y0 + dy);
+            if x >= 0.0 && y >= 0.0 && x < n && y < n {
+                let i = y as usize * self.px + x as usize;
+                self.w[i] += w * k;
+                self.c[i] += c * k;
+            }
+        }
+    }
+
+    /// The per-pixel estimate. A pilot pass finds, at each pixel, the finest level whose
+    /// neighbourhood holds `k_s` rays (blended between levels; or `fixed_level` everywhere); then
+    /// the light splatted at each pixel is spread with its own pixel's kernel (a sample-point
+    /// estimator: a bright spot keeps its narrow kernel while the sparse pixels around it spread
+    /// only their own light, and the total is kept exactly).
+    pub fn estimate(self, k_s: f64, fixed_level: Option<f64>) -> Estimate {
+        let px = self.px;
+        let total: f64 = self.c.iter().sum();
+        let base_w = self.w.clone();
+        let mut levels = vec![Level {
+            n: px,
+            w: self.w,
+            c: self.c,
+        }];
+        while levels[levels.len() - 1].n > 1 {
+            let next = levels[levels.len() - 1].down();
+            levels.push(next);
+        }
+        let top = levels.len() - 1;
+        let mut level = vec![0.0f32; px * px];
+        let mut undersampled = 0u64;
+        if total <= 0.0 {
+            return Estimate {
+                density: vec![0.0; px * px],
+                level,
+                undersampled,
+                total,
+            };
+        }
+        for by in 0..px {
+            for bx in 0..px {
+                let i = by * px + bx;
+                let count = |k: usize| levels[k].read(k as u32, bx, by).1 * AREA_FACTOR;
+                let l = match fixed_level {
+                    Some(f) => f.clamp(0.0, top as f64),
+                    None => {
+                        let mut prev = count(0);
+                        if prev >= k_s {
+                            0.0
+                        } else {
+                            let mut found = None;
+                            for k in 1..=top {
+                                let cur = count(k);
+                                if cur >= k_s {
+                                    let t = if prev > 0.0 && cur > prev {
+                                        ((k_s / prev).ln() / (cur / prev).ln()).clamp(0.0, 1.0)
+                                    } else {
+                                        1.0
+                                    };
+                                    found = Some((k - 1) as f64 + t);
+                                    break;
+                                }
+                                prev = cur;
+                            }
+                            found.unwrap_or_else(|| {
+                                if base_w[i] > 0.0 {
+                                    undersampled += 1;
+                                }
+                                top as f64
+                            })
+                        }
+                    }
+                };
+                level[i] = l as f32;
+            }
+        }
+        let density = spread_by_level(px, &base_w, &level);
+        Estimate {
+            density,
+            level,
+            undersampled,
+            total,
+        }
+    }
+}
+
+/// Spreads the values `w` of a `px` × `px` grid, each with the kernel of its own pixel's level
+/// (`level`, fractional levels split linearly between the two neighbours), and sums the results:
+/// the estimator's spatial operator, applied to any grid (the splatted rays, or a reference).
+/// The total is kept.
+pub fn spread_by_level(px: usize, w: &[f64], level: &[f32]) -> Vec<f64> {
+    let top = levels_for(px);
+    let mut parts: Vec<Vec<f64>> = vec![Vec::new(); top + 1];
+    for (i, (&v, &l)) in w.iter().zip(level).enumerate() {
+        if v == 0.0 {
+            continue;
+        }
+        let l = f64::from(l).clamp(0.0, top as f64);
+        let k0 = l.floor() as usize;
+        let t = l - k0 as f64;
+        for (k, share) in [(k0, 1.0 - t), ((k0 + 1).min(top), t)] {
+            if share > 0.0 {
+                if parts[k].is_empty() {
+                    parts[k] = vec![0.0; px * px];
+                }
+                parts[k][i] += v * share;
+            }
+        }
+    }
+    let mut out = vec![0.0; px * px];
+    for (k, part) in parts.into_iter().enumerate() {
+        if part.is_empty() {
+            continue;
+        }
+        let mut lv = Level {
+            n: px,
+            w: part,
+            c: vec![0.0; px * px],
+        };
+        for _ in 0..k {
+            lv = lv.down();
+        }
+        for by in 0..px {
+            for bx in 0..px {
+                out[by * px + bx] += lv.read(k as u32, bx, by).0;
+            }
+        }
+    }
+    out
+}
+
+/// The number of halvings from `px` down to one pixel.
+fn levels_for(px: usize) -> usize {
+    let mut n = px.max(1);
+    let mut k = 0;
+    while n > 1 {
+        n = n.div_ceil(2);
+        k += 1;
+    }
+    k
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Second moment (σ², px²) of the level-k response to one ray at `uv`, per axis.
+    fn response_sigma(k: f64, uv: DVec2, px: u32) -> (f64, f64) {
+        let mut p = Pyramid::new(px);
+        p.splat(uv, 1.0, 1.0);
+        let e = p.estimate(1.0, Some(k));
+        let n = px as usize;
+        let total: f64 = e.density.iter().sum();
+        let (mut mx, mut my) = (0.0, 0.0);
+        for y in 0..n {
+            for x in 0..n {
+                let v = e.density[y * n + x] / total;
+                mx += v * (x as f64 + 0.5);
+                my += v * (y as f64 + 0.5);
+            }
+        }
+        let mut var = 0.0;
+        for y in 0..n {
+            for x in 0..n {
+                let v = e.density[y * n + x] / total;
+                var += v * ((x as f64 + 0.5 - mx).powi(2) + (y as f64 + 0.5 - my).powi(2)) / 2.0;
+            }
+        }
+        (var.sqrt(), total)
+    }
+
+    #[test]
+    fn every_level_keeps_the_total_and_its_kernel_doubles() {
+        for k in 1..=4 {
+            let mut sum = 0.0;
+            let mut count = 0.0;
+            for (x, y) in [(64.3, 64.7), (63.9, 65.2), (64.5, 64.5), (65.1, 63.6)] {
+                let (s, total) = response_sigma(f64::from(k), DVec2::new(x, y), 128);
+                assert!((total - 1.0).abs() < 1e-9, "level {k}: total {total}");
+                sum += s;
+                count += 1.0;
+            }
+            let s = sum / count / f64::from(1u32 << k);
+            assert!((s - LEVEL_SIGMA_PX).abs() < 0.15, "level {k}: σ / 2^k = {s}");
+        }
+    }
+
+    #[test]
+    fn dense_regions_keep_fine_kernels_and_sparse_ones_widen() {
+        // 4000 rays on one pixel, 40 spread thinly elsewhere: the spot stays at level ≤ 1.
+        let mut p = Pyramid::new(64);
+        for _ in 0..4000 {
+            p.splat(DVec2::new(20.5, 20.5), 1.0, 1.0);
+        }
+        for i in 0..40 {
+            p.splat(
+                DVec2::new(40.0 + (i % 8) as f64 * 2.0, 40.0 + (i / 8) as f64 * 3.0),
+                1.0,
+                1.0,
+            );
+        }
+        let e = p.estimate(100.0, None);
+        assert!(e.level[20 * 64 + 20] <= 1.0, "{}", e.level[20 * 64 + 20]);
+        assert!(e.level[45 * 64 + 45] >= 2.0, "{}", e.level[45 * 64 + 45]);
+        let total: f64 = e.density.iter().sum();
+        assert!((total - 4040.0).abs() < 0.05 * 4040.0, "{total}");
+    }
+}
