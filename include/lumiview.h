@@ -197,8 +197,9 @@ typedef struct lumi_luminaire_desc {
   // Near-field: optional proxy mesh, a glTF 2.0 file (`.glb`, or `.gltf` with its buffers) of the
   // surfaces where the luminance appears, in the luminaire frame with glTF's axes (+Y up: glTF
   // (X, Y, Z) is luminaire (X, −Z, Y)), metres, inside the capture sphere. NUL-terminated UTF-8,
-  // borrowed for the call; NULL for none. With a proxy, each fragment is reprojected through its
-  // surface point (parallax-correct) and depth comes from the proxy.
+  // borrowed for the call; NULL for the scan's own proxy where its `.lvpack` stores one (a TM-25
+  // ray file's scan does: the hull of its ray origins), else none. With a proxy, each fragment is
+  // reprojected through its surface point (parallax-correct) and depth comes from the proxy.
   const char *proxy_path;
   // Near-field: radius (m) of the ball around the capture centre holding everything the cameras
   // saw; 0 derives it from the scan's tile bounding boxes. Otherwise finite, > 0 and below the
@@ -253,7 +254,8 @@ typedef struct lumi_luminaire_info {
   double housing_size_m[3];
   // Near-field: capture cameras (images) in the scan.
   uint32_t camera_count;
-  // Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`).
+  // Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`, or
+  // the one stored in the scan's `.lvpack`, e.g. the grown hull of a ray file's ray origins).
   bool has_proxy;
   // Near-field: centre of the capture sphere in the luminaire frame, metres.
   double capture_centre_m[3];

@@ -44,7 +44,8 @@ struct Lum {
     // idw4 offsets, idw4 items, first entry of the quadratic stencils in `tris` (7 per triangle,
     // src/nearfield/select/gpu.rs), unused.
     lists_b: vec4<u32>,
-    // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z, w unused.
+    // x = cos(max gap) for nearest/idw4, y = visibility-test margin (m), z = 1 when the proxy only
+    // bounds the light (images sampled plainly), w unused.
     gap: vec4<f32>,
     // The proxy's BVH in `tris` (src/nearfield/bvh.rs): x = first node word (2 per node), y = first
     // triangle word (3 per triangle), z = 1 when there is one, w = number of nodes.
@@ -296,7 +297,9 @@ fn luminance_of(cam: Cam, p: vec3<f32>, v: vec3<f32>, proxy: bool) -> f32 {
     if (h.z <= 0.0) {
         return 0.0;
     }
-    return sample_camera(cam, h.xy / h.z, proxy);
+    // A proxy that only bounds the light (lum.gap.z = 1) is sampled plainly: its dark texels are
+    // the estimate's own darkness, not the space beyond a surface's edge.
+    return sample_camera(cam, h.xy / h.z, proxy && lum.gap.z < 0.5);
 }
 
 fn cell_of(u: vec3<f32>) -> u32 {

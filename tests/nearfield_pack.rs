@@ -524,13 +524,22 @@ fn truncated_and_foreign_files_are_errors() {
         Err(NearfieldError::Format { .. })
     ));
     // A later version is reported as such.
+    let mut v3 = bytes.clone();
+    v3[8] = 3;
+    let crc = crc32fast::hash(&v3[..60]);
+    v3[60..64].copy_from_slice(&crc.to_le_bytes());
+    assert!(matches!(
+        Pack::from_bytes(v3, &OpenOptions::default()),
+        Err(NearfieldError::Unsupported { .. })
+    ));
+    // A version-1 file relabelled 2 fails on its metadata's version, naming the section.
     let mut v2 = bytes.clone();
     v2[8] = 2;
     let crc = crc32fast::hash(&v2[..60]);
     v2[60..64].copy_from_slice(&crc.to_le_bytes());
     assert!(matches!(
         Pack::from_bytes(v2, &OpenOptions::default()),
-        Err(NearfieldError::Unsupported { .. })
+        Err(NearfieldError::Corrupt { .. })
     ));
     assert!(matches!(
         Pack::open(&tmp("does-not-exist.lvpack")),
@@ -818,20 +827,40 @@ fn cli_packs_synthetic_scans_manifests_and_ray_files() {
         assert_eq!(q.decode_image(i).unwrap(), p.decode_image(i).unwrap(), "image {i}");
     }
 
-    // A TM-25 ray file, binned into a small virtual scan.
+    // A TM-25 ray file: its kernel estimate, stored with the hull of its ray origins (version 2).
     let rays = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/raysets/Cyl10k.1.tm25ray");
     let from_rays = tmp("cli-rays.lvpack");
     let out = lumiview()
         .arg("pack")
         .arg(&rays)
-        .args(["--layout", "fibonacci:20", "--size", "16x16", "--quiet", "-o"])
+        .args(["--quiet", "-o"])
         .arg(&from_rays)
         .output()
         .unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let r = Pack::open(&from_rays).unwrap();
-    assert_eq!(r.image_count(), 20);
+    assert!(r.image_count() >= 12);
     assert!(r.metadata().footprint.pixels_kept > 0);
+    assert!(r.proxy().is_some_and(|p| p.bound && !p.triangles.is_empty()));
+    // Repacking keeps the proxy; a camera layout for a ray file is refused (rays2scan sets it).
+    let again = tmp("cli-rays-again.lvpack");
+    let out = lumiview()
+        .arg("pack")
+        .arg(&from_rays)
+        .args(["--quiet", "-o"])
+        .arg(&again)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(Pack::open(&again).unwrap().proxy(), r.proxy());
+    let out = lumiview()
+        .arg("pack")
+        .arg(&rays)
+        .args(["--layout", "fibonacci:20", "-o"])
+        .arg(tmp("x.lvpack"))
+        .output()
+        .unwrap();
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--layout"));
 
     // Errors name what is wrong.
     for args in [

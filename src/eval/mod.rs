@@ -6,6 +6,7 @@
 //! as the table `lumiview eval` shows; [`write_triptych`] writes a view as render | reference | error.
 
 pub mod metrics;
+pub mod rays;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -110,7 +110,8 @@ pub struct lumi_luminaire_info {
     pub housing_size_m: [f64; 3],
     /// Near-field: capture cameras (images) in the scan.
     pub camera_count: u32,
-    /// Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`).
+    /// Near-field: the luminaire has a proxy mesh (loaded from `lumi_luminaire_desc.proxy_path`, or
+    /// the one stored in the scan's `.lvpack`, e.g. the grown hull of a ray file's ray origins).
     pub has_proxy: bool,
     /// Near-field: centre of the capture sphere in the luminaire frame, metres.
     pub capture_centre_m: [f64; 3],
@@ -140,8 +141,9 @@ pub struct lumi_luminaire_desc {
     /// Near-field: optional proxy mesh, a glTF 2.0 file (`.glb`, or `.gltf` with its buffers) of the
     /// surfaces where the luminance appears, in the luminaire frame with glTF's axes (+Y up: glTF
     /// (X, Y, Z) is luminaire (X, −Z, Y)), metres, inside the capture sphere. NUL-terminated UTF-8,
-    /// borrowed for the call; NULL for none. With a proxy, each fragment is reprojected through its
-    /// surface point (parallax-correct) and depth comes from the proxy.
+    /// borrowed for the call; NULL for the scan's own proxy where its `.lvpack` stores one (a TM-25
+    /// ray file's scan does: the hull of its ray origins), else none. With a proxy, each fragment is
+    /// reprojected through its surface point (parallax-correct) and depth comes from the proxy.
     pub proxy_path: *const c_char,
     /// Near-field: radius (m) of the ball around the capture centre holding everything the cameras
     /// saw; 0 derives it from the scan's tile bounding boxes. Otherwise finite, > 0 and below the
@@ -332,13 +334,18 @@ fn load_any(c: &mut ContextInner, path: &Path, d: &ScanDesc) -> Result<Luminaire
     };
     let (pack, _cached) =
         scanfile::open_scan_of_kind(path, kind, d.cache_dir.as_deref()).map_err(|e| in_file(path, e.into()))?;
-    let proxy = match &d.proxy {
-        Some(p) => Some(crate::nearfield::proxy::load_gltf(p)?),
-        None => None,
+    // The caller's mesh wins; else the pack's own (a ray file's grown hull bounds the light).
+    let (proxy, bound) = match &d.proxy {
+        Some(p) => (Some(crate::nearfield::proxy::load_gltf(p)?), false),
+        None => match pack.proxy() {
+            Some(pp) => (Some(pp.triangles.clone()), pp.bound),
+            None => (None, false),
+        },
     };
     let opts = NearfieldOptions {
         budget_bytes: d.budget_bytes,
         content_radius_m: d.content_radius_m,
+        proxy_is_bound: bound,
         ..NearfieldOptions::default()
     };
     c.renderer

@@ -52,6 +52,11 @@ pub struct NearfieldOptions {
     /// instead of the content ball's box where it applies. The image is the same either way (the
     /// tests compare them); only the work differs.
     pub bounding_polygon: bool,
+    /// The proxy encloses the light rather than being its surface (a ray file's grown hull,
+    /// `PackProxy::bound`): images are then sampled plainly, dark texels included. Otherwise, in
+    /// proxy mode, the bilinear weights are renormalised over the texels that hold light, so a
+    /// surface's edge is not darkened by the darkness beyond it in the capture.
+    pub proxy_is_bound: bool,
 }
 
 impl Default for NearfieldOptions {
@@ -61,6 +66,7 @@ impl Default for NearfieldOptions {
             content_radius_m: None,
             selection: SelectionOptions::default(),
             bounding_polygon: true,
+            proxy_is_bound: false,
         }
     }
 }
@@ -814,8 +820,14 @@ impl NearfieldPass {
                 lists_a: [tri_off, tri_items, n1_off, n1_items],
                 lists_b: [n4_off, n4_items, quad_base, 0],
                 bvh: bvh_bases,
-                // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm).
-                gap: [g.cos_max_gap, (1e-4 * content).max(1e-6) as f32, 0.0, 0.0],
+                // Visibility-test margin: 10⁻⁴ of the content radius (at least 1 µm); z: 1 when
+                // the proxy only bounds the light (plain bilinear sampling).
+                gap: [
+                    g.cos_max_gap,
+                    (1e-4 * content).max(1e-6) as f32,
+                    if opts.proxy_is_bound { 1.0 } else { 0.0 },
+                    0.0,
+                ],
             };
             let chunks_per_page = (max_binding / CHUNK_BYTES).max(1) as u32;
             let pool_layout = PoolLayout {

@@ -4,9 +4,10 @@
 //! that the second load only opens it.
 //!
 //! - `.lvpack`: the magic `LVPACK` at offset 0; opened as it is.
-//! - TM-25 ray file: the magic `TM25` at offset 0; binned into a virtual scan with
-//!   [`BinningOptions::default`] (Fibonacci layout of 1000 cameras, 64 × 64 px, capture radius
-//!   1.1 m), exactly what `lumiview pack RAYS.tm25ray -o OUT.lvpack` does.
+//! - TM-25 ray file: the magic `TM25` at offset 0; turned into a virtual scan by the kernel density
+//!   estimate of its light field ([`raykde::estimate`], cameras, images and kernels chosen from the
+//!   data) and packed with the grown hull of its ray origins as the proxy, exactly what
+//!   `lumiview pack RAYS.tm25ray -o OUT.lvpack` does.
 //! - JSON scan manifest: the first character other than white space (and a UTF-8 byte-order mark)
 //!   is `{`; imported with [`load_scan`] (no bad image skipped), exactly what
 //!   `lumiview pack manifest.json -o OUT.lvpack` does.
@@ -28,10 +29,11 @@ use std::io::Read as _;
 use std::path::{Path, PathBuf};
 use std::time::UNIX_EPOCH;
 
-use super::binning::{bin_rays, BinningOptions};
 use super::error::{NearfieldError, Result};
 use super::manifest::{load_scan, ImportOptions};
-use super::pack::{write_pack, Pack, PackOptions};
+use super::pack::{write_pack, Pack, PackOptions, PackProxy};
+use super::proxy::triangles_of;
+use super::raykde;
 use super::tm25::RayFile;
 use super::Scan;
 
@@ -50,7 +52,8 @@ pub enum ScanFileKind {
 const SNIFF_BYTES: usize = 4096;
 
 /// Cache format: part of every key, so a change of the defaults below invalidates old entries.
-const CACHE_VERSION: &str = "lumiview scan cache 1: lvpack defaults, tm25 fibonacci:1000 64x64 r1.1, manifest strict";
+const CACHE_VERSION: &str =
+    "lumiview scan cache 2: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict";
 
 /// Reads the first bytes of `path` and says which kind of scan file it is, or `None` for anything
 /// else (photometry, garbage).
@@ -86,12 +89,15 @@ pub fn kind_of(head: &[u8]) -> Option<ScanFileKind> {
     }
 }
 
-/// The scan a manifest or ray file describes, with the defaults of this module, and a description
-/// for the pack's metadata. (A `.lvpack` is already a scan: open it with [`Pack::open`].)
+/// The scan a manifest or ray file describes, with the defaults of this module, a description for
+/// the pack's metadata, and the proxy to store with it (a ray file's: the grown hull of its ray
+/// origins, which bounds the light). A ray file becomes a kernel density estimate of its light
+/// field ([`raykde::estimate`], every choice from the data). (A `.lvpack` is already a scan: open
+/// it with [`Pack::open`].)
 ///
-/// Errors: those of [`load_scan`], [`RayFile::read`] and [`bin_rays`], each naming the file;
-/// [`NearfieldError::InvalidArgument`] for [`ScanFileKind::Pack`].
-pub fn scan_from_file(path: &Path, kind: ScanFileKind) -> Result<(Scan, String)> {
+/// Errors: those of [`load_scan`], [`RayFile::read`] and [`raykde::estimate`], each naming the
+/// file; [`NearfieldError::InvalidArgument`] for [`ScanFileKind::Pack`].
+pub fn scan_from_file(path: &Path, kind: ScanFileKind) -> Result<(Scan, String, Option<PackProxy>)> {
     match kind {
         ScanFileKind::Pack => Err(NearfieldError::invalid(
             "kind",
@@ -103,23 +109,28 @@ pub fn scan_from_file(path: &Path, kind: ScanFileKind) -> Result<(Scan, String)>
                 verify_pixels: false,
             };
             let scan = load_scan(&[path.to_path_buf()], &opts)?;
-            Ok((scan, format!("scan manifest {}", path.display())))
+            Ok((scan, format!("scan manifest {}", path.display()), None))
         }
         ScanFileKind::RayFile => {
-            let opts = BinningOptions::default();
             let rays = RayFile::read(path)?;
-            let binned = bin_rays(&rays, &opts)?;
+            let est = raykde::estimate(&rays, &raykde::KdeOptions::default(), &|_, _| {})?;
+            let r = &est.report;
             let desc = format!(
-                "TM-25 ray file {} binned (default options: {} cameras, {}x{} px, r = {} m, {} of {} rays used)",
+                "TM-25 ray file {} as a kernel estimate ({} rays; intensity kernel {:.2}° median, spatial σ \
+                 {:.3} mm median; {} cameras of {}² px)",
                 path.display(),
-                binned.scan.set.cameras.len(),
-                opts.width,
-                opts.height,
-                opts.sphere.radius_m,
-                binned.report.rays_used,
-                binned.report.rays_total
+                r.rays,
+                r.angular_kernel_deg.median,
+                r.spatial_kernel_m.median * 1e3,
+                r.cameras,
+                r.image_px
             );
-            Ok((binned.scan, desc))
+            let proxy = PackProxy {
+                triangles: triangles_of(&est.proxy),
+                bound: true,
+                source: "the hull of the ray origins, grown by two spatial kernels".into(),
+            };
+            Ok((est.scan, desc, Some(proxy)))
         }
     }
 }
@@ -217,7 +228,7 @@ pub fn open_scan_of_kind(path: &Path, kind: ScanFileKind, cache_dir: Option<&Pat
             return Ok((p, Some(cached)));
         }
     }
-    let (scan, source) = scan_from_file(path, kind)?;
+    let (scan, source, proxy) = scan_from_file(path, kind)?;
     std::fs::create_dir_all(&dir).map_err(|e| NearfieldError::io(&dir, e))?;
     let nonce = std::time::SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -225,6 +236,7 @@ pub fn open_scan_of_kind(path: &Path, kind: ScanFileKind, cache_dir: Option<&Pat
     let tmp = cached.with_extension(format!("{}-{nonce}.tmp.lvpack", std::process::id()));
     let opts = PackOptions {
         source,
+        proxy,
         ..PackOptions::default()
     };
     if let Err(e) = write_pack(&scan, &tmp, &opts, &|_, _| {}) {

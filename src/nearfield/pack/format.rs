@@ -22,7 +22,23 @@ use super::tiles::TileBox;
 /// The first 8 bytes of every `.lvpack` file.
 pub const MAGIC: [u8; 8] = *b"LVPACK\r\n";
 /// The format version this code writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
+
+/// The first format version (no `proxy` section); still read and still written for packs without a
+/// proxy, byte for byte as before.
+pub const VERSION_1: u32 = 1;
+
+/// Name of the optional proxy-mesh section (version 2).
+pub const PROXY: &str = "proxy";
+
+/// Magic of the proxy section.
+pub const PROXY_MAGIC: [u8; 4] = *b"LVPX";
+
+/// Bytes of the proxy section's fixed header: magic, flags, triangle count.
+pub const PROXY_HEADER_BYTES: usize = 16;
+
+/// Most proxy triangles a pack holds (2²⁴: 604 MB of f32).
+pub const MAX_PROXY_TRIANGLES: u64 = 1 << 24;
 /// Bytes of the header.
 pub const HEADER_BYTES: usize = 64;
 /// Bytes of one directory entry.
@@ -65,6 +81,8 @@ pub fn page_name(index: usize) -> String {
 /// The fixed header at offset 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Header {
+    /// Format version: [`VERSION_1`] or [`VERSION`].
+    pub version: u32,
     /// Total file length in bytes (a shorter file is truncated).
     pub file_len: u64,
     /// Offset of the section directory.
@@ -81,7 +99,7 @@ impl Header {
     pub fn encode(&self) -> [u8; HEADER_BYTES] {
         let mut b = [0u8; HEADER_BYTES];
         b[0..8].copy_from_slice(&MAGIC);
-        b[8..12].copy_from_slice(&VERSION.to_le_bytes());
+        b[8..12].copy_from_slice(&self.version.to_le_bytes());
         b[12..16].copy_from_slice(&(HEADER_BYTES as u32).to_le_bytes());
         b[16..24].copy_from_slice(&self.file_len.to_le_bytes());
         b[24..32].copy_from_slice(&self.dir_offset.to_le_bytes());
@@ -129,7 +147,7 @@ pub fn decode_header(b: &[u8]) -> Result<Header, HeaderError> {
     if crc32fast::hash(&b[..60]) != crc {
         return Err(HeaderError::Checksum);
     }
-    if version != VERSION {
+    if version != VERSION && version != VERSION_1 {
         return Err(HeaderError::Version(version));
     }
     if header_size as usize != HEADER_BYTES || entry as usize != DIR_ENTRY_BYTES {
@@ -138,6 +156,7 @@ pub fn decode_header(b: &[u8]) -> Result<Header, HeaderError> {
         )));
     }
     Ok(Header {
+        version,
         file_len,
         dir_offset,
         dir_count,
@@ -491,6 +510,61 @@ pub struct PackMetadata {
     pub tiles: TileCounts,
     /// Sizes for comparison, computed while packing.
     pub footprint: FootprintMeta,
+    /// The proxy mesh stored with the scan (version 2; absent in version 1 packs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub proxy: Option<ProxyMeta>,
+}
+
+/// The proxy mesh in the metadata.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProxyMeta {
+    /// Triangles in the `proxy` section.
+    pub triangles: u64,
+    /// `"surface"`: the mesh is the emitting surface (images sampled only where they hold light);
+    /// `"bound"`: it encloses the light (images sampled plainly, darkness included).
+    pub kind: String,
+    /// Where the mesh came from.
+    pub source: String,
+}
+
+/// Serialises the proxy section: magic `LVPX`, u32 flags (1 = the mesh bounds the light rather
+/// than being its surface), u64 triangle count, then 9 f32 per triangle (m, luminaire frame).
+pub fn encode_proxy(triangles: &[[f32; 3]], bound: bool) -> Vec<u8> {
+    let mut out = Vec::with_capacity(PROXY_HEADER_BYTES + 12 * triangles.len());
+    out.extend_from_slice(&PROXY_MAGIC);
+    out.extend_from_slice(&u32::from(bound).to_le_bytes());
+    out.extend_from_slice(&((triangles.len() / 3) as u64).to_le_bytes());
+    for v in triangles.iter().take(triangles.len() / 3 * 3) {
+        for c in v {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// Parses the proxy section into its vertices (three per triangle) and the bound flag.
+pub fn decode_proxy(b: &[u8]) -> Result<(Vec<[f32; 3]>, bool), String> {
+    if b.len() < PROXY_HEADER_BYTES || b[..4] != PROXY_MAGIC {
+        return Err("no proxy header".into());
+    }
+    let mut r = Le::new(b);
+    r.skip(4);
+    let (flags, count) = (r.u32(), r.u64());
+    if flags > 1 {
+        return Err(format!("unknown flags {flags}"));
+    }
+    if count > MAX_PROXY_TRIANGLES || (b.len() - PROXY_HEADER_BYTES) as u64 != count * 36 {
+        return Err(format!("{count} triangles do not fill {} bytes", b.len()));
+    }
+    let mut v = Vec::with_capacity(count as usize * 3);
+    for _ in 0..count * 3 {
+        let p = [r.f32(), r.f32(), r.f32()];
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err("a vertex is not finite".into());
+        }
+        v.push(p);
+    }
+    Ok((v, flags == 1))
 }
 
 /// Capture sphere in the metadata.
@@ -640,5 +714,9 @@ impl<'a> Le<'a> {
     /// An f64.
     pub fn f64(&mut self) -> f64 {
         f64::from_le_bytes(self.take())
+    }
+    /// An f32.
+    pub fn f32(&mut self) -> f32 {
+        f32::from_le_bytes(self.take())
     }
 }

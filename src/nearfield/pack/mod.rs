@@ -100,6 +100,21 @@ pub struct PackOptions {
     pub chunk_images: usize,
     /// A description of the input, stored in the metadata (e.g. the manifest path).
     pub source: String,
+    /// A proxy mesh to store with the scan (makes a version-2 pack).
+    pub proxy: Option<PackProxy>,
+}
+
+/// A proxy mesh stored in a pack: the surface (or a bound of the surfaces) where the images'
+/// luminance appears, used for parallax-correct rendering unless the user gives another.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PackProxy {
+    /// Triangle vertices, three per triangle (m, luminaire frame).
+    pub triangles: Vec<[f32; 3]>,
+    /// True when the mesh encloses the light rather than being its surface (a ray file's grown
+    /// hull): the renderer then samples the images plainly, darkness included.
+    pub bound: bool,
+    /// Where the mesh came from.
+    pub source: String,
 }
 
 impl Default for PackOptions {
@@ -110,6 +125,7 @@ impl Default for PackOptions {
             page_bytes: MAX_PAGE_BYTES,
             chunk_images: 0,
             source: String::new(),
+            proxy: None,
         }
     }
 }

@@ -136,6 +136,7 @@ pub struct Pack {
     file_len: u64,
     dir_offset: u64,
     sections: Vec<SectionInfo>,
+    proxy: Option<super::PackProxy>,
     pages: Vec<SectionInfo>,
     metadata: PackMetadata,
     layout: PoolLayout,
@@ -201,7 +202,11 @@ impl Pack {
             HeaderError::Checksum => corrupt("header", "checksum mismatch".into()),
             HeaderError::Version(v) => NearfieldError::Unsupported {
                 path: path.clone(),
-                message: format!(".lvpack version {v}; this lumiview reads version {}", format::VERSION),
+                message: format!(
+                    ".lvpack version {v}; this lumiview reads versions {} and {}",
+                    format::VERSION_1,
+                    format::VERSION
+                ),
             },
             HeaderError::Field(m) => corrupt("header", m),
         })?;
@@ -259,7 +264,17 @@ impl Pack {
                 _ => Err(corrupt("directory", format!("more than one '{name}' section"))),
             }
         };
-        let small = [format::METADATA, format::CAMERAS, format::IMAGES, format::TILE_TABLES];
+        let small: &[&str] = if header.version == format::VERSION_1 {
+            &[format::METADATA, format::CAMERAS, format::IMAGES, format::TILE_TABLES]
+        } else {
+            &[
+                format::METADATA,
+                format::CAMERAS,
+                format::IMAGES,
+                format::TILE_TABLES,
+                format::PROXY,
+            ]
+        };
         let page_count = sections.iter().filter(|s| s.name.starts_with(PAGE_PREFIX)).count();
         if let Some(s) = sections.iter().find(|s| {
             !small.contains(&s.name.as_str())
@@ -321,12 +336,12 @@ impl Pack {
 
         let metadata: PackMetadata =
             serde_json::from_slice(&meta_b).map_err(|e| corrupt(format::METADATA, format!("invalid JSON: {e}")))?;
-        if metadata.format != "lvpack" || metadata.version != format::VERSION {
+        if metadata.format != "lvpack" || metadata.version != header.version {
             return Err(corrupt(
                 format::METADATA,
                 format!(
-                    "format '{}' version {} is not lvpack 1",
-                    metadata.format, metadata.version
+                    "format '{}' version {} is not lvpack {}",
+                    metadata.format, metadata.version, header.version
                 ),
             ));
         }
@@ -442,6 +457,50 @@ impl Pack {
                 "tile size, page or camera counts disagree with the binary sections".into(),
             ));
         }
+        // The proxy (version 2, optional): checked whole at open, like the other small sections.
+        let proxy = match sections.iter().find(|s| s.name == format::PROXY) {
+            None => {
+                if metadata.proxy.is_some() {
+                    return Err(corrupt(
+                        format::METADATA,
+                        "names a proxy but there is no proxy section".into(),
+                    ));
+                }
+                None
+            }
+            Some(s) => {
+                if s.length > format::PROXY_HEADER_BYTES as u64 + 36 * format::MAX_PROXY_TRIANGLES {
+                    return Err(corrupt(
+                        format::PROXY,
+                        format!("{} bytes is beyond the limit", s.length),
+                    ));
+                }
+                let body = read(s.offset, s.length)?;
+                let crc = crc32fast::hash(&body);
+                if crc != s.crc32 {
+                    return Err(corrupt(
+                        format::PROXY,
+                        format!("checksum mismatch (stored {:08x}, computed {crc:08x})", s.crc32),
+                    ));
+                }
+                let (triangles, bound) = format::decode_proxy(&body).map_err(|m| corrupt(format::PROXY, m))?;
+                let meta = metadata
+                    .proxy
+                    .as_ref()
+                    .ok_or_else(|| corrupt(format::METADATA, "no proxy entry for the proxy section".into()))?;
+                if meta.triangles != (triangles.len() / 3) as u64 || (meta.kind == "bound") != bound {
+                    return Err(corrupt(
+                        format::METADATA,
+                        "the proxy entry disagrees with the proxy section".into(),
+                    ));
+                }
+                Some(super::PackProxy {
+                    triangles,
+                    bound,
+                    source: meta.source.clone(),
+                })
+            }
+        };
         let pack = Pack {
             path,
             backing,
@@ -460,6 +519,7 @@ impl Pack {
             set,
             images,
             tables,
+            proxy,
         };
         if opts.verify_pages {
             pack.verify()?;
@@ -528,6 +588,11 @@ impl Pack {
     /// The section directory (names, offsets, lengths, CRC32s).
     pub fn sections(&self) -> &[SectionInfo] {
         &self.sections
+    }
+
+    /// The proxy mesh stored with the scan (version-2 packs), if any.
+    pub fn proxy(&self) -> Option<&super::PackProxy> {
+        self.proxy.as_ref()
     }
 
     /// Number of pool pages.

@@ -433,7 +433,11 @@ impl PoolWriter {
         };
         let meta = PackMetadata {
             format: "lvpack".into(),
-            version: format::VERSION,
+            version: if opts.proxy.is_some() {
+                format::VERSION
+            } else {
+                format::VERSION_1
+            },
             created_by: format!("lumiview {}", env!("CARGO_PKG_VERSION")),
             source: opts.source.clone(),
             capture_sphere: SphereMeta {
@@ -477,12 +481,30 @@ impl PoolWriter {
                 pool_bytes,
                 tile_table_bytes: 4 * self.spill.entries,
             },
+            proxy: opts.proxy.as_ref().map(|p| format::ProxyMeta {
+                triangles: (p.triangles.len() / 3) as u64,
+                kind: if p.bound { "bound" } else { "surface" }.into(),
+                source: p.source.clone(),
+            }),
         };
         let json = serde_json::to_vec_pretty(&meta)
             .map_err(|e| NearfieldError::invalid("metadata", format!("cannot serialise: {e}")))?;
         self.section(format::METADATA, &json)?;
         self.section(format::CAMERAS, &format::encode_cameras(set))?;
         self.section(format::IMAGES, &format::encode_images(&layout, &self.images))?;
+        if let Some(p) = &opts.proxy {
+            if p.triangles.len() / 3 > format::MAX_PROXY_TRIANGLES as usize {
+                return Err(NearfieldError::invalid(
+                    "proxy",
+                    format!(
+                        "{} triangles exceed {}",
+                        p.triangles.len() / 3,
+                        format::MAX_PROXY_TRIANGLES
+                    ),
+                ));
+            }
+            self.section(format::PROXY, &format::encode_proxy(&p.triangles, p.bound))?;
+        }
 
         // Tile tables: copy the spill file in.
         self.align()?;
@@ -526,6 +548,11 @@ impl PoolWriter {
         let dir_offset = self.pos;
         self.write(&dir)?;
         let header = Header {
+            version: if opts.proxy.is_some() {
+                format::VERSION
+            } else {
+                format::VERSION_1
+            },
             file_len: self.pos,
             dir_offset,
             dir_count: self.sections.len() as u32,

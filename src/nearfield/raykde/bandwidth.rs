@@ -1,7 +1,9 @@
 //! The angular half of the ray-file estimate and the virtual camera layout: a histogram of the ray
-//! directions on a fine Fibonacci grid, the k-nearest-neighbour angle holding k_a rays about any
-//! direction, cameras placed at about half that spacing, and each camera's rays found through the
-//! grid cells near it.
+//! directions on a fine Fibonacci grid; two k-nearest-neighbour angles per direction, a narrow one
+//! holding k_I rays for the intensity and a wide one holding k_S rays for the spatial footprint;
+//! cameras placed about one intensity width apart; each camera's rays found through the grid
+//! cells near it. Each ray carries the widths of its own direction (sample-point estimators, so
+//! the kernels are normalised per ray and the flux is kept).
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -10,7 +12,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::hull::SourceCloud;
-use super::{KdeOptions, DEFAULT_B, MAX_CAMERAS, MAX_TOTAL_PIXELS};
+use super::{KdeOptions, DEFAULT_B, DEFAULT_BI, MAX_AUTO_CAMERAS, MAX_CAMERAS, MAX_TOTAL_PIXELS};
 use crate::nearfield::binning::NearestDirection;
 use crate::nearfield::error::{NearfieldError, Result};
 
@@ -64,8 +66,10 @@ pub struct RaySummary {
 pub struct Bandwidths {
     /// Rays per spatial kernel k_s.
     pub rays_per_kernel: f64,
-    /// Rays per angular kernel k_a.
+    /// Rays per footprint kernel k_S (the angular pool of the spatial estimate).
     pub rays_per_angular_kernel: f64,
+    /// Rays per intensity kernel k_I.
+    pub rays_per_intensity_kernel: f64,
     fine: NearestDirection,
     fine_dirs: Vec<DVec3>,
     /// Effective rays per fine cell.
@@ -77,9 +81,16 @@ pub struct Bandwidths {
     /// Narrowest and widest angular half-width allowed (rad).
     h_min: f64,
     h_max: f64,
-    /// The angular width at the coarse directions, and those directions.
+    /// The angular width at the coarse directions, and those directions (for the layout).
     coarse: NearestDirection,
     coarse_h: Vec<f64>,
+    /// The footprint (spatial pool) half-width of the rays in each fine cell (rad): the
+    /// k-nearest-neighbour angle holding k_S rays about the cell's direction.
+    cell_h: Vec<f64>,
+    /// The intensity half-width of the rays in each fine cell (rad), holding k_I rays.
+    cell_hi: Vec<f64>,
+    /// Narrowest and widest intensity widths allowed (rad).
+    hi_max: f64,
     /// Effective rays, (Σ Φ)² / Σ Φ².
     n_eff: f64,
     /// Mean flux per effective ray (lm).
@@ -141,6 +152,10 @@ impl Bandwidths {
             .min(n_eff / 4.0)
             .max(1.0);
         let k_a = (k_s * n_eff).sqrt().clamp(k_s, n_eff);
+        let k_i = opts
+            .rays_per_intensity_kernel
+            .unwrap_or(DEFAULT_BI * n_eff.powf(2.0 / 3.0))
+            .clamp(1.0, k_a);
         let n_fine = ((n_eff / 8.0) as usize).clamp(2000, 40_000);
         let fine_dirs = fibonacci(n_fine);
         let fine = NearestDirection::new(&fine_dirs);
@@ -171,6 +186,7 @@ impl Bandwidths {
         let mut me = Self {
             rays_per_kernel: k_s,
             rays_per_angular_kernel: k_a,
+            rays_per_intensity_kernel: k_i,
             fine,
             fine_dirs,
             counts,
@@ -180,26 +196,53 @@ impl Bandwidths {
             h_max: PI / 2.0,
             coarse: NearestDirection::new(&coarse_dirs),
             coarse_h: Vec::new(),
+            cell_h: Vec::new(),
+            cell_hi: Vec::new(),
+            hi_max: PI / 2.0,
             n_eff,
             flux_per_ray,
             source_radius: source.radius,
         };
-        let raw: Vec<(f64, f64)> = coarse_dirs.par_iter().map(|d| me.knn_angle(*d)).collect();
-        // Cap: three times the flux-weighted median width of the lit directions.
-        let mut lit_h: Vec<(f64, f64)> = raw.iter().filter(|(_, w)| *w > 0.0).copied().collect();
-        lit_h.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let total: f64 = lit_h.iter().map(|p| p.1).sum();
-        let mut acc = 0.0;
-        let mut median = PI / 4.0;
-        for (h, w) in &lit_h {
-            acc += w;
-            if acc >= total / 2.0 {
-                median = *h;
-                break;
+        // Caps: three times the flux-weighted median width of the lit directions.
+        let cap = |k: f64| -> f64 {
+            let raw: Vec<(f64, f64)> = coarse_dirs.par_iter().map(|d| me.knn_angle(*d, k)).collect();
+            let mut lit_h: Vec<(f64, f64)> = raw.into_iter().filter(|(_, w)| *w > 0.0).collect();
+            lit_h.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let total: f64 = lit_h.iter().map(|p| p.1).sum();
+            let mut acc = 0.0;
+            for (h, w) in &lit_h {
+                acc += w;
+                if acc >= total / 2.0 {
+                    return (3.0 * h).clamp(me.h_min, PI / 2.0);
+                }
             }
+            PI / 2.0
+        };
+        let (h_max, hi_max) = (cap(k_a), cap(k_i));
+        me.h_max = h_max;
+        me.hi_max = hi_max.min(h_max);
+        let fixed = opts.angular_kernel_deg.map(f64::to_radians);
+        let widths: Vec<(usize, f64, f64)> = me
+            .lit
+            .par_iter()
+            .map(|&j| {
+                let d = me.fine_dirs[j];
+                let hs = me.knn_angle(d, k_a).0.clamp(me.h_min, me.h_max);
+                let hi = fixed.unwrap_or_else(|| me.knn_angle(d, k_i).0.clamp(me.h_min, me.hi_max));
+                (j, hs.max(hi), hi)
+            })
+            .collect();
+        me.cell_h = vec![0.0; n_fine];
+        me.cell_hi = vec![0.0; n_fine];
+        for (j, hs, hi) in widths {
+            me.cell_h[j] = hs;
+            me.cell_hi[j] = hi;
         }
-        me.h_max = (3.0 * median).clamp(me.h_min, PI / 2.0);
-        me.coarse_h = raw.iter().map(|(h, _)| h.clamp(me.h_min, me.h_max)).collect();
+        // The layout plans with the intensity widths (spread over the unlit directions too).
+        me.coarse_h = coarse_dirs
+            .par_iter()
+            .map(|d| fixed.unwrap_or_else(|| me.knn_angle(*d, k_i).0.clamp(me.h_min, me.hi_max)))
+            .collect();
         if n_eff < 1000.0 {
             warnings.push(format!(
                 "{}: {n_eff:.0} effective rays: the estimate is very coarse (kernels of {k_s:.0} rays)",
@@ -209,9 +252,9 @@ impl Bandwidths {
         Ok(me)
     }
 
-    /// The k-nearest-neighbour angle about `d` holding k_a rays (rad), and the rays within the
+    /// The k-nearest-neighbour angle about `d` holding `k` rays (rad), and the rays within the
     /// fine cell nearest `d` (a weight for medians over directions).
-    fn knn_angle(&self, d: DVec3) -> (f64, f64) {
+    fn knn_angle(&self, d: DVec3, k: f64) -> (f64, f64) {
         let mut hist = [0.0f64; ANGLE_BINS];
         for &j in &self.lit {
             let a = d.dot(self.fine_dirs[j]).clamp(-1.0, 1.0).acos();
@@ -220,12 +263,8 @@ impl Bandwidths {
         }
         let mut acc = 0.0;
         for (b, c) in hist.iter().enumerate() {
-            if acc + c >= self.rays_per_angular_kernel {
-                let t = if *c > 0.0 {
-                    (self.rays_per_angular_kernel - acc) / c
-                } else {
-                    1.0
-                };
+            if acc + c >= k {
+                let t = if *c > 0.0 { (k - acc) / c } else { 1.0 };
                 let h = (b as f64 + t) * PI / ANGLE_BINS as f64;
                 let own = self.fine.nearest(d).map_or(0.0, |j| self.counts[j]);
                 return (h, own);
@@ -235,13 +274,33 @@ impl Bandwidths {
         (PI, 0.0)
     }
 
-    /// The angular half-width at direction `d` (rad): the given one, or the k-nearest-neighbour
-    /// angle within [h_min, h_max].
-    pub fn angular_at(&self, d: DVec3, opts: &KdeOptions) -> f64 {
-        match opts.angular_kernel_deg {
-            Some(h) => h.to_radians(),
-            None => self.knn_angle(d).0.clamp(self.h_min, self.h_max),
+    /// Up to `n` cameras (indices into `dirs`) nearest the fine cells holding the most rays, each
+    /// once: where the spatial detail is judged for the image size.
+    pub fn brightest_cameras(&self, dirs: &[DVec3], n: usize) -> Vec<usize> {
+        let near = NearestDirection::new(dirs);
+        let mut cells: Vec<usize> = self.lit.clone();
+        cells.sort_by(|a, b| self.counts[*b].total_cmp(&self.counts[*a]));
+        let mut out: Vec<usize> = Vec::new();
+        for j in cells {
+            if let Some(i) = near.nearest(self.fine_dirs[j]) {
+                if !out.contains(&i) {
+                    out.push(i);
+                    if out.len() == n {
+                        break;
+                    }
+                }
+            }
         }
+        out
+    }
+
+    /// (footprint half-width, intensity half-width, effective rays) of the lit cells (rad), for
+    /// reports.
+    pub fn widths(&self) -> Vec<(f64, f64, f64)> {
+        self.lit
+            .iter()
+            .map(|&j| (self.cell_h[j], self.cell_hi[j], self.counts[j]))
+            .collect()
     }
 
     /// The width the layout plans with at `d`: the nearest coarse direction's.
@@ -292,14 +351,14 @@ impl Bandwidths {
         })
     }
 
-    /// Cameras at about half the local angular width apart: a greedy variable-radius Poisson-disc
+    /// Cameras about 0.7 intensity widths apart: a greedy variable-radius Poisson-disc
     /// selection over the fine directions, narrowest widths first; spread wider when the limits
     /// would be exceeded.
     fn adaptive_directions(&self, opts: &KdeOptions, image_px: u32) -> Vec<DVec3> {
-        let limit = MAX_CAMERAS.min((MAX_TOTAL_PIXELS / (u64::from(image_px) * u64::from(image_px))) as usize);
+        let limit = MAX_AUTO_CAMERAS.min((MAX_TOTAL_PIXELS / (u64::from(image_px) * u64::from(image_px))) as usize);
         let mut order: Vec<(f64, DVec3)> = self.fine_dirs.iter().map(|d| (self.planned(*d, opts), *d)).collect();
         order.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let mut factor = 0.5;
+        let mut factor = 0.7;
         loop {
             let picked = poisson(&order, factor, limit);
             if let Some(p) = picked {
@@ -344,15 +403,17 @@ impl Bandwidths {
         CellRays { starts, items }
     }
 
-    /// The rays of the fine cells within `h` (plus a cell's radius) of `d`.
-    pub fn cells_within<'a>(&'a self, cells: &'a CellRays, d: DVec3, h: f64) -> impl Iterator<Item = u32> + 'a {
-        let cos = (h + self.cell_radius).min(PI).cos();
+    /// The rays whose kernels can reach direction `d`: those of the fine cells within their own
+    /// footprint width (plus a cell's radius) of `d`, with their (footprint, intensity) widths
+    /// (rad; the intensity width is the narrower).
+    pub fn rays_reaching<'a>(&'a self, cells: &'a CellRays, d: DVec3) -> impl Iterator<Item = (u32, f64, f64)> + 'a {
         self.lit
             .iter()
-            .filter(move |&&j| self.fine_dirs[j].dot(d) >= cos)
+            .filter(move |&&j| self.fine_dirs[j].dot(d) >= (self.cell_h[j] + self.cell_radius).min(PI).cos())
             .flat_map(move |&j| {
                 let (s, e) = (cells.starts[j] as usize, cells.starts[j + 1] as usize);
-                cells.items[s..e].iter().copied()
+                let (h, hi) = (self.cell_h[j], self.cell_hi[j]);
+                cells.items[s..e].iter().map(move |&r| (r, h, hi))
             })
     }
 

@@ -23,8 +23,8 @@
 //! neighbourhood of u holds k_s of the camera's rays ([`pyramid`]). Both are adaptive: dense
 //! directions and bright spots get narrow kernels, sparse ones wide kernels. Cameras are placed
 //! where the angular kernel needs them (spacing about half of it), so the renderer's interpolation
-//! between cameras adds little blur. The estimate conserves flux up to kernel tails outside the
-//! images; the remainder is corrected globally and reported.
+//! between cameras adds little blur. Every kernel is normalised, so the estimate holds the rays'
+//! flux (up to kernel tails past the images); the cameras' quadrature of it is reported as a check.
 //!
 //! The widths chosen are reported ([`KdeReport`]) and kept per camera and pixel ([`KernelMaps`]) so
 //! a reference can be convolved with the same kernel (docs/quality-metrics.md, ray files).
@@ -47,18 +47,32 @@ use super::tm25::{LuminousSource, RayFile};
 /// Upper bound on the pixels of all images together (2²⁶ f32 = 256 MiB, as for binning).
 pub const MAX_TOTAL_PIXELS: u64 = 1 << 26;
 
+/// Largest image side chosen automatically (px).
+pub const MAX_AUTO_PX: u32 = 256;
+
+/// Pixels of all images together when the size is chosen automatically (2²⁴ f32 = 64 MiB).
+pub const AUTO_TOTAL_PIXELS: u64 = 1 << 24;
+
 /// Most virtual cameras.
 pub const MAX_CAMERAS: usize = 20_000;
 
-/// Default rays per kernel: k_s = `DEFAULT_B` · √N_eff.
+/// Default rays per spatial kernel: k_s = `DEFAULT_B` · √N_eff.
 pub const DEFAULT_B: f64 = 8.0;
+
+/// Default rays per intensity kernel: k_I = `DEFAULT_BI` · N_eff^(2/3) (a 2-D estimate's rate).
+pub const DEFAULT_BI: f64 = 0.5;
+
+/// Most virtual cameras chosen automatically.
+pub const MAX_AUTO_CAMERAS: usize = 6000;
 
 /// Choices; everything `None` is chosen from the data.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct KdeOptions {
-    /// Rays per kernel k_s (default `DEFAULT_B` · √N_eff).
+    /// Rays per spatial kernel k_s (default `DEFAULT_B` · √N_eff).
     pub rays_per_kernel: Option<f64>,
-    /// A fixed angular kernel half-width (degrees) instead of the k-nearest-neighbour one.
+    /// Rays per intensity kernel k_I (default `DEFAULT_BI` · N_eff^(2/3)).
+    pub rays_per_intensity_kernel: Option<f64>,
+    /// A fixed intensity kernel half-width (degrees) instead of the k-nearest-neighbour one.
     pub angular_kernel_deg: Option<f64>,
     /// A fixed spatial kernel σ (metres) instead of the pyramid's adaptive one.
     pub spatial_kernel_m: Option<f64>,
@@ -94,11 +108,16 @@ pub struct KdeReport {
     pub flux_lm: f64,
     /// Rays per spatial kernel k_s.
     pub rays_per_kernel: f64,
-    /// Rays per angular kernel k_a.
+    /// Rays per footprint kernel k_S (the angular pool of the spatial estimate).
     pub rays_per_angular_kernel: f64,
-    /// Angular kernel half-width over the lit cameras (degrees).
+    /// Rays per intensity kernel k_I.
+    pub rays_per_intensity_kernel: f64,
+    /// Intensity kernel half-width of the rays (degrees; weighted by their flux).
     pub angular_kernel_deg: Spread,
-    /// Spatial kernel σ over the lit pixels (metres).
+    /// Footprint kernel half-width of the rays (degrees): how far apart in direction the rays that
+    /// shape one camera's image may travel.
+    pub footprint_kernel_deg: Spread,
+    /// Spatial kernel σ of the light (metres; weighted by the flux each pixel spreads).
     pub spatial_kernel_m: Spread,
     /// Virtual cameras.
     pub cameras: usize,
@@ -114,10 +133,9 @@ pub struct KdeReport {
     pub radius_m: f64,
     /// Radius of the ray origins about their centre (m).
     pub source_radius_m: f64,
-    /// Σ L·A·Ω over all images before the flux correction (lm).
+    /// Σ L·A·Ω over the cameras with their Voronoi solid angles (lm): the layout's quadrature of
+    /// the estimate, which itself holds the rays' flux.
     pub flux_from_images_lm: f64,
-    /// Factor applied to every image so that they hold the rays' flux (1 = nothing lost).
-    pub flux_correction: f64,
     /// Pixels whose kernel reached the whole image without k_s rays (under-sampled cameras).
     pub undersampled_pixels: u64,
     /// What the user should know.
@@ -127,10 +145,78 @@ pub struct KdeReport {
 /// The kernel widths used, per camera and pixel, for kernel-matched references.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KernelMaps {
-    /// Angular half-width per camera (radians).
+    /// Weighted intensity half-width of the rays each camera gathered (radians; each ray carries
+    /// the width of its own direction: a sample-point estimator).
     pub angular_rad: Vec<f64>,
+    /// Weighted footprint half-width of the rays each camera's image was shaped from (radians).
+    pub footprint_rad: Vec<f64>,
     /// Spatial σ per camera and pixel (metres), row-major like the images.
     pub spatial_m: Vec<Vec<f32>>,
+}
+
+/// One camera's image, its kernel σ per pixel, its under-sampled pixels, the weighted intensity
+/// and footprint widths of the rays it gathered (rad), and (σ in px, weight) of its lit pixels.
+type CameraEstimate = (LuminanceImage, Vec<f32>, u64, (f64, f64), Vec<(f64, f64)>);
+
+/// What every camera's estimate reads.
+struct Gather<'a> {
+    bw: &'a Bandwidths,
+    cells: &'a bandwidth::CellRays,
+    rays: &'a Rays<'a>,
+    k_s: f64,
+}
+
+impl Gather<'_> {
+    /// The estimate of one camera (direction `dir` from the sphere's centre) with intrinsics `k`:
+    /// the image as Σ flux × angular kernel per pixel (lm/sr; divide by the pixel's footprint for
+    /// cd/m²) and the kernel σ per pixel in pixels.
+    fn camera(&self, cam: &Camera, dir: DVec3, k: &Intrinsics, fixed_level: Option<f64>) -> CameraEstimate {
+        let px = k.width;
+        let mut pyr = Pyramid::new(px);
+        // The intensity (lm/sr) from the intensity kernels; the footprint from the wider pool.
+        let (mut intensity, mut ih, mut iw) = (0.0, 0.0, 0.0);
+        let (mut fh, mut fw) = (0.0, 0.0);
+        for (r, h, hi) in self.bw.rays_reaching(self.cells, dir) {
+            let Some((x, kd, f)) = self.rays.get(r as usize) else {
+                continue;
+            };
+            let theta = kd.dot(dir).clamp(-1.0, 1.0).acos();
+            if theta < hi {
+                let w = f * (1.0 - (theta / hi).powi(2)) * angular_kernel(hi);
+                intensity += w;
+                ih += w * hi;
+                iw += w;
+            }
+            if theta >= h {
+                continue;
+            }
+            let a = 1.0 - (theta / h).powi(2);
+            let Some(uv) = k.project(cam.to_camera(x - cam.position_m)) else {
+                continue;
+            };
+            let w = f * a * angular_kernel(h);
+            pyr.splat(uv, w, a);
+            fh += w * h;
+            fw += w;
+        }
+        let est = pyr.estimate(self.k_s, fixed_level);
+        let shape: f64 = est.density.iter().sum();
+        let scale = if shape > 0.0 { intensity / shape } else { 0.0 };
+        let image = LuminanceImage {
+            width: px,
+            height: px,
+            data: est.density.iter().map(|w| (*w * scale) as f32).collect(),
+        };
+        let sigma: Vec<f32> = est
+            .level
+            .iter()
+            .map(|l| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*l))) as f32)
+            .collect();
+        let h_cam = if iw > 0.0 { ih / iw } else { 0.0 };
+        let f_cam = if fw > 0.0 { fh / fw } else { 0.0 };
+        let mass = est.mass_sigma.into_iter().map(|(s, w)| (s, w * scale)).collect();
+        (image, sigma, est.undersampled, (h_cam, f_cam), mass)
+    }
 }
 
 /// A ray set turned into a virtual scan.
@@ -277,75 +363,71 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
             Camera::on_sphere(&sphere, *d, h, format!("kde {i}"))
         })
         .collect();
-    let px = layout.image_px;
-    let total_px = u64::from(px) * u64::from(px) * cameras.len() as u64;
-    if total_px > MAX_TOTAL_PIXELS {
-        return Err(NearfieldError::invalid(
-            "image-px",
-            format!(
-                "{} cameras × {px}² px = {total_px} pixels exceed the in-memory limit of {MAX_TOTAL_PIXELS}",
-                cameras.len()
-            ),
-        ));
-    }
-    let focal = f64::from(px) / 2.0 / (layout.fov_deg.to_radians() / 2.0).tan();
-    let intrinsics = Intrinsics {
-        width: px,
-        height: px,
-        principal_px: DVec2::splat(f64::from(px) / 2.0),
-        focal_px: DVec2::splat(focal),
-    };
-    intrinsics.validate("ray file estimate")?;
-    let pixel_m = layout.radius_m / focal;
-    let pixel_area = pixel_m * pixel_m;
-    // Which rays each camera gathers: by fine direction cell.
-    progress("angular kernels", 0.2);
+    progress("angular kernels", 0.15);
     let cells = bw.cell_rays(&get, rays.len());
     let dirs: Vec<DVec3> = layout.directions.clone();
-    let h_a: Vec<f64> = dirs.iter().map(|d| bw.angular_at(*d, opts)).collect();
     let k_s = bw.rays_per_kernel;
+    let intrinsics_for = |px: u32| {
+        let focal = f64::from(px) / 2.0 / (layout.fov_deg.to_radians() / 2.0).tan();
+        Intrinsics {
+            width: px,
+            height: px,
+            principal_px: DVec2::splat(f64::from(px) / 2.0),
+            focal_px: DVec2::splat(focal),
+        }
+    };
+    let gather = Gather {
+        bw: &bw,
+        cells: &cells,
+        rays: &rays,
+        k_s,
+    };
+    // Image size: given, or from a pilot at 256 px of the brightest directions, so that the finer
+    // quarter of the light's kernels spans at least a pixel and a half.
+    let px = match opts.image_px {
+        Some(p) => p,
+        None => {
+            let pilot_px = 256;
+            let k = intrinsics_for(pilot_px);
+            let pixel = layout.radius_m / k.focal_px.x;
+            let mut samples = Vec::new();
+            for i in bw.brightest_cameras(&dirs, 8) {
+                let est = gather.camera(&cameras[i], dirs[i], &k, None);
+                samples.extend(est.4.into_iter().map(|(s, w)| (s * pixel, w)));
+            }
+            let sigma = spread(samples).p10.max(pixel);
+            let half_width = layout.radius_m * (layout.fov_deg.to_radians() / 2.0).tan();
+            ((2.0 * half_width * 1.5 / sigma).ceil() as u32).clamp(32, MAX_AUTO_PX)
+        }
+    };
+    let budget = if opts.image_px.is_some() {
+        MAX_TOTAL_PIXELS
+    } else {
+        AUTO_TOTAL_PIXELS
+    };
+    let px = px
+        .min(((budget / cameras.len().max(1) as u64) as f64).sqrt() as u32)
+        .max(8);
+    let intrinsics = intrinsics_for(px);
+    intrinsics.validate("ray file estimate")?;
+    let pixel_m = layout.radius_m / intrinsics.focal_px.x;
+    let pixel_area = pixel_m * pixel_m;
     let done = std::sync::atomic::AtomicUsize::new(0);
     let m = cameras.len();
-    let per_camera: Vec<(LuminanceImage, Vec<f32>, u64, f64)> = cameras
+    let fixed_level = opts
+        .spatial_kernel_m
+        .map(|s| (s / pixel_m / LEVEL_SIGMA_PX).log2().max(0.0));
+    progress("estimating", 0.2);
+    let per_camera: Vec<CameraEstimate> = cameras
         .par_iter()
         .enumerate()
         .map(|(i, cam)| {
-            let (kernel_norm, h) = (angular_kernel(h_a[i]), h_a[i]);
-            let mut pyr = Pyramid::new(px);
-            for r in bw.cells_within(&cells, dirs[i], h) {
-                let Some((x, k, f)) = rays.get(r as usize) else {
-                    continue;
-                };
-                let cos = k.dot(dirs[i]).clamp(-1.0, 1.0);
-                let theta = cos.acos();
-                if theta >= h {
-                    continue;
-                }
-                let a = 1.0 - (theta / h).powi(2);
-                let Some(uv) = intrinsics.project(cam.to_camera(x - cam.position_m)) else {
-                    continue;
-                };
-                pyr.splat(uv, f * a * kernel_norm, a);
-            }
-            let fixed_level = opts
-                .spatial_kernel_m
-                .map(|s| (s / pixel_m / LEVEL_SIGMA_PX).log2().max(0.0));
-            let est = pyr.estimate(k_s, fixed_level);
-            let image = LuminanceImage {
-                width: px,
-                height: px,
-                data: est.density.iter().map(|w| (*w / pixel_area) as f32).collect(),
-            };
-            let sigma: Vec<f32> = est
-                .level
-                .iter()
-                .map(|l| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*l)) * pixel_m) as f32)
-                .collect();
+            let est = gather.camera(cam, dirs[i], &intrinsics, fixed_level);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if n % 64 == 0 {
+            if n % 16 == 0 {
                 progress("estimating", 0.2 + 0.7 * n as f64 / m as f64);
             }
-            (image, sigma, est.undersampled, est.total)
+            est
         })
         .collect();
     // Flux held by the images, with each camera's Voronoi solid angle.
@@ -354,44 +436,44 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     let flux_images: f64 = per_camera
         .iter()
         .zip(&omega)
-        .map(|((img, ..), o)| img.data.iter().map(|v| f64::from(*v)).sum::<f64>() * pixel_area * o)
+        .map(|((img, ..), o)| img.data.iter().map(|v| f64::from(*v)).sum::<f64>() * o)
         .sum();
-    let correction = if flux_images > 0.0 { flux / flux_images } else { 1.0 };
-    if !(0.9..=1.1).contains(&correction) {
+    // The continuous estimate holds every ray's flux (normalised kernels); the cameras sample it,
+    // and their Voronoi quadrature of it is a check on the layout, not a correction.
+    let quadrature = flux_images / flux;
+    if !(0.8..=1.2).contains(&quadrature) {
         warnings.push(format!(
-            "{}: the kernel estimate held {:.1} % of the rays' flux before correction (kernels reaching past the \
-             images or the capture sphere's cameras too sparse for the angular kernel)",
+            "{}: the cameras' quadrature holds {:.1} % of the rays' flux: the layout is coarse for the angular kernel",
             path.display(),
-            100.0 / correction
+            100.0 * quadrature
         ));
     }
     let mut images = Vec::with_capacity(m);
     let mut sigmas = Vec::with_capacity(m);
+    let mut h_a = Vec::with_capacity(m);
+    let mut h_f = Vec::with_capacity(m);
     let mut undersampled = 0u64;
     let mut lit = 0usize;
     let mut spatial_samples = Vec::new();
-    for (img, sigma, under, _) in per_camera {
+    for (img, sigma, under, h_cam, mass_sigma) in per_camera {
         let mut img = img;
         for v in &mut img.data {
-            *v = (f64::from(*v) * correction) as f32;
+            *v = (f64::from(*v) / pixel_area) as f32;
         }
+        let sigma: Vec<f32> = sigma.iter().map(|s| (f64::from(*s) * pixel_m) as f32).collect();
         if img.data.iter().any(|v| *v > 0.0) {
             lit += 1;
         }
-        for (v, s) in img.data.iter().zip(&sigma).step_by(7) {
-            if *v > 0.0 {
-                spatial_samples.push((f64::from(*s), f64::from(*v)));
-            }
-        }
+        spatial_samples.extend(mass_sigma.into_iter().map(|(s, w)| (s * pixel_m, w)));
         undersampled += under;
+        h_a.push(h_cam.0);
+        h_f.push(h_cam.1);
         images.push(img);
         sigmas.push(sigma);
     }
-    let cam_light: Vec<f64> = images
-        .iter()
-        .map(|i| i.data.iter().map(|v| f64::from(*v)).sum::<f64>())
-        .collect();
-    let angular_spread = spread(h_a.iter().zip(&cam_light).map(|(h, w)| (h.to_degrees(), *w)).collect());
+    let widths = bw.widths();
+    let angular_spread = spread(widths.iter().map(|(_, h, w)| (h.to_degrees(), *w)).collect());
+    let footprint_spread = spread(widths.iter().map(|(h, _, w)| (h.to_degrees(), *w)).collect());
     let spatial_spread = spread(spatial_samples);
     if undersampled > 0 {
         warnings.push(format!(
@@ -401,7 +483,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         ));
     }
     progress("proxy", 0.95);
-    let grow = 2.0 * spatial_spread.p90.max(pixel_m);
+    let grow = (2.0 * spatial_spread.p90).max(3.0 * pixel_m);
     let proxy = source.proxy(grow, "ray origins, grown by two spatial kernels");
     let report = KdeReport {
         rays: raw.len() as u64,
@@ -409,7 +491,9 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         flux_lm: flux,
         rays_per_kernel: k_s,
         rays_per_angular_kernel: bw.rays_per_angular_kernel,
+        rays_per_intensity_kernel: bw.rays_per_intensity_kernel,
         angular_kernel_deg: angular_spread,
+        footprint_kernel_deg: footprint_spread,
         spatial_kernel_m: spatial_spread,
         cameras: m,
         cameras_lit: lit,
@@ -419,7 +503,6 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         radius_m: layout.radius_m,
         source_radius_m: source.radius,
         flux_from_images_lm: flux_images,
-        flux_correction: correction,
         undersampled_pixels: undersampled,
         warnings,
     };
@@ -439,6 +522,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         proxy,
         kernels: KernelMaps {
             angular_rad: h_a,
+            footprint_rad: h_f,
             spatial_m: sigmas,
         },
     })
@@ -454,6 +538,7 @@ fn check_options(o: &KdeOptions) -> Result<()> {
         }
     };
     pos("rays-per-kernel", o.rays_per_kernel, 1.0, 1e9)?;
+    pos("rays-per-intensity-kernel", o.rays_per_intensity_kernel, 1.0, 1e9)?;
     pos("angular-kernel", o.angular_kernel_deg, 0.01, 90.0)?;
     pos("spatial-kernel", o.spatial_kernel_m, 1e-9, 10.0)?;
     pos("radius", o.radius_m, 1e-4, 1e4)?;

@@ -40,6 +40,9 @@ pub struct Estimate {
     pub undersampled: u64,
     /// Σ of the splatted weights (the camera's rays, by angular weight).
     pub total: f64,
+    /// (kernel σ in base pixels, weight) of every pixel holding splatted light: the widths the
+    /// light actually spreads with.
+    pub mass_sigma: Vec<(f64, f64)>,
 }
 
 /// One level: a square grid of side `n` with its values.
@@ -185,6 +188,7 @@ impl Pyramid {
                 level,
                 undersampled,
                 total,
+                mass_sigma: Vec::new(),
             };
         }
         for by in 0..px {
@@ -225,11 +229,18 @@ impl Pyramid {
             }
         }
         let density = spread_by_level(px, &base_w, &level);
+        let mass_sigma = base_w
+            .iter()
+            .zip(&level)
+            .filter(|(w, _)| **w > 0.0)
+            .map(|(w, l)| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*l)), *w))
+            .collect();
         Estimate {
             density,
             level,
             undersampled,
             total,
+            mass_sigma,
         }
     }
 }

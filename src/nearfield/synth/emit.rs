@@ -20,8 +20,9 @@
 //! 3. The ray starts at the surface point (the proxy hit), so ray origins lie on the emitting
 //!    surfaces, as the start points of measured ray files lie on (or near) the source.
 //!
-//! The total flux of the rays is a Monte-Carlo estimate of [`Luminaire::flux_lm`] (its error falls
-//! as 1/√N); deterministic for a seed. Both cores are used.
+//! The total flux of the rays is a Monte-Carlo estimate of [`Luminaire::flux_lm`] from every
+//! sample drawn (its error falls as 1/√N), shared among the rays by their weights; deterministic
+//! for a seed. Both cores are used.
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -348,8 +349,13 @@ pub fn emit_rays(lum: &dyn Luminaire, rays: u64, seed: u64, progress: &(dyn Fn(f
             ));
         }
     }
+    // The flux all kept samples estimate, shared by the first `rays` of them in proportion to
+    // their weights (dropping the surplus of the last chunk must not drop its flux).
+    let all_weight: f64 = kept.iter().map(|r| r.2).sum();
+    let total_flux = std::f64::consts::TAU * z * all_weight / trials as f64;
     kept.truncate(rays as usize);
-    let unit = std::f64::consts::TAU * z / trials as f64;
+    let kept_weight: f64 = kept.iter().map(|r| r.2).sum();
+    let unit = total_flux / kept_weight;
     Ok(EmittedRays {
         origins: kept.iter().map(|r| r.0).collect(),
         directions: kept.iter().map(|r| r.1).collect(),

@@ -20,8 +20,13 @@ pub struct ScaleBar<'a> {
     pub colour_of: &'a dyn Fn(f64) -> [u8; 3],
 }
 
-/// A tick value as printed: 1, 20, 500, 5k, 2M …
+/// A tick value as printed: 1, 20, 500, 5k, 2M, 1e9 …
 fn tick_label(v: f64) -> String {
+    if v >= 1e9 {
+        let e = v.log10().floor();
+        let m = (v / 10f64.powf(e)).round();
+        return format!("{m}e{e}");
+    }
     let (d, suffix) = if v >= 1e6 {
         (v / 1e6, "M")
     } else if v >= 1e3 {
@@ -152,6 +157,7 @@ mod tests {
         assert_eq!(tick_label(5000.0), "5k");
         assert_eq!(tick_label(0.02), "0.02");
         assert_eq!(tick_label(2e6), "2M");
+        assert_eq!(tick_label(5e15), "5e15");
     }
 
     #[test]

@@ -5,13 +5,11 @@ use std::time::Instant;
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use lumiview::nearfield::binning::{bin_rays, BinningOptions};
 use lumiview::nearfield::manifest::{load_scan, ImportOptions};
-use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackStats, Threshold, MAX_PAGE_BYTES};
+use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackProxy, PackStats, Threshold, MAX_PAGE_BYTES};
 use lumiview::nearfield::scanfile::{self, ScanFileKind};
 use lumiview::nearfield::synth::{synth_scan, SynthOptions};
-use lumiview::nearfield::tm25::RayFile;
-use lumiview::nearfield::{CaptureSphere, Hemisphere, Scan};
+use lumiview::nearfield::{Hemisphere, Scan};
 use serde_json::json;
 
 use super::{print_report, CliResult};
@@ -19,9 +17,10 @@ use super::{print_report, CliResult};
 /// `lumiview pack`: store a scan as a tiled `.lvpack` file.
 #[derive(Args, Debug)]
 pub struct PackArgs {
-    /// Input: scan manifest(s) (.json; e.g. one per hemisphere), an IES TM-25 ray file (binned into
-    /// a virtual scan with --layout/--size/--radius) or an existing .lvpack (repacked with the
-    /// options given). Omit with --synth.
+    /// Input: scan manifest(s) (.json; e.g. one per hemisphere), an IES TM-25 ray file (a kernel
+    /// estimate of its light field, cameras and kernels chosen from the data, stored with the hull
+    /// of its ray origins as the proxy; `lumiview rays2scan` sets the estimate's options) or an
+    /// existing .lvpack (repacked with the options given, its proxy kept). Omit with --synth.
     pub input: Vec<PathBuf>,
     /// Output file (.lvpack).
     #[arg(short = 'o', long = "output", value_name = "FILE.lvpack")]
@@ -40,14 +39,14 @@ pub struct PackArgs {
     /// star-panel, two-planes, strips, led-dots, cos1, cos10, cos100, reflector, peak).
     #[arg(long, value_name = "LUMINAIRE")]
     pub synth: Option<String>,
-    /// Camera layout for --synth or a ray file: rigo:N (N per hemisphere), fibonacci:N or grid:P,T
-    /// (default: rigo:28000 for --synth, fibonacci:1000 for ray files).
+    /// Camera layout for --synth: rigo:N (N per hemisphere), fibonacci:N or grid:P,T (default
+    /// rigo:28000).
     #[arg(long, value_name = "LAYOUT")]
     pub layout: Option<String>,
-    /// Image size WxH in pixels for --synth or a ray file (default 1216x1021 / 64x64).
+    /// Image size WxH in pixels for --synth (default 1216x1021).
     #[arg(long, value_name = "WxH")]
     pub size: Option<String>,
-    /// Capture sphere radius in metres for --synth or a ray file (default 1.117 / 1.1).
+    /// Capture sphere radius in metres for --synth (default 1.117).
     #[arg(long, value_name = "M")]
     pub radius: Option<f64>,
     /// Manifests: drop bad images (missing, unreadable, wrong size, bad pose) with a warning
@@ -62,8 +61,11 @@ pub struct PackArgs {
     pub json: bool,
 }
 
-/// The scan the arguments describe, with a description for the metadata.
-fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Error>> {
+/// The scan the arguments describe, a description for the metadata, and the proxy to store.
+type Input = (Scan, String, Option<PackProxy>);
+
+/// The scan the arguments describe, with a description for the metadata and the proxy to store.
+fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
     if let Some(name) = &args.synth {
         if !args.input.is_empty() {
             return Err("give either input files or --synth, not both".into());
@@ -86,7 +88,7 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
             "synthetic {} ({layout_text}, {}x{} px, r = {} m)",
             opts.luminaire, opts.size.0, opts.size.1, opts.radius_m
         );
-        return Ok((synth_scan(&opts)?, desc));
+        return Ok((synth_scan(&opts)?, desc, None));
     }
     let Some(file) = args.input.first() else {
         return Err("nothing to pack: give a scan manifest, a ray file, an .lvpack or --synth LUMINAIRE".into());
@@ -99,7 +101,20 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
         };
         let scan = load_scan(&args.input, &opts)?;
         let names: Vec<String> = args.input.iter().map(|p| p.display().to_string()).collect();
-        return Ok((scan, format!("scan manifest {}", names.join(" + "))));
+        return Ok((scan, format!("scan manifest {}", names.join(" + ")), None));
+    }
+    for (given, name) in [
+        (args.layout.is_some(), "--layout"),
+        (args.size.is_some(), "--size"),
+        (args.radius.is_some(), "--radius"),
+    ] {
+        if given {
+            return Err(format!(
+                "{name} applies to --synth; a ray file's estimate chooses its cameras from the data (set them with \
+                 `lumiview rays2scan`, then pack its manifest)"
+            )
+            .into());
+        }
     }
     if args.input.len() > 1 {
         return Err("several inputs are only allowed for scan manifests (one per hemisphere)".into());
@@ -107,37 +122,11 @@ fn input_scan(args: &PackArgs) -> Result<(Scan, String), Box<dyn std::error::Err
     if kind == Some(ScanFileKind::Pack) {
         let pack = Pack::open(file)?;
         let desc = format!("repacked from {} ({})", file.display(), pack.metadata().source);
-        return Ok((pack.into_scan(), desc));
+        let proxy = pack.proxy().cloned();
+        return Ok((pack.into_scan(), desc, proxy));
     }
-    // A TM-25 ray file.
-    let d = BinningOptions::default();
-    let layout_text = args.layout.as_deref().unwrap_or("fibonacci:1000");
-    let (width, height) = args
-        .size
-        .as_deref()
-        .map(crate::commands::parse_size_px)
-        .transpose()?
-        .unwrap_or((d.width, d.height));
-    let opts = BinningOptions {
-        sphere: CaptureSphere {
-            radius_m: args.radius.unwrap_or(d.sphere.radius_m),
-            ..d.sphere
-        },
-        layout: crate::commands::parse_layout(layout_text)?,
-        width,
-        height,
-        ..d
-    };
-    let rays = RayFile::read(file)?;
-    let binned = bin_rays(&rays, &opts)?;
-    let desc = format!(
-        "TM-25 ray file {} binned ({layout_text}, {width}x{height} px, r = {} m, {} of {} rays used)",
-        file.display(),
-        opts.sphere.radius_m,
-        binned.report.rays_used,
-        binned.report.rays_total
-    );
-    Ok((binned.scan, desc))
+    // A TM-25 ray file: as `lumi_luminaire_load` and `render` read it.
+    Ok(scanfile::scan_from_file(file, ScanFileKind::RayFile)?)
 }
 
 fn stats_json(path: &Path, s: &PackStats, secs: f64) -> serde_json::Value {
@@ -168,13 +157,14 @@ pub fn pack(args: &PackArgs) -> CliResult {
         return Err(format!("--page-mib {}: must be within 1…128", args.page_mib).into());
     }
     let threshold = Threshold::parse(&args.threshold)?;
-    let (scan, source) = input_scan(args)?;
+    let (scan, source, proxy) = input_scan(args)?;
     let opts = PackOptions {
         tile_size: args.tile,
         threshold,
         page_bytes: args.page_mib << 20,
         chunk_images: 0,
         source,
+        proxy,
     };
     let n = scan.set.cameras.len() as u64;
     let bar = if args.quiet {

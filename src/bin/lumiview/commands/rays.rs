@@ -4,49 +4,82 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 use glam::DVec3;
-use lumiview::nearfield::binning::{bin_rays, BinnedScan, BinningOptions, BinningReport};
+use lumiview::nearfield::binning::{bin_rays, BinningOptions, BinningReport};
+use lumiview::nearfield::raykde::{estimate, KdeOptions};
 use lumiview::nearfield::tm25::{RayFile, RayStats};
 use lumiview::nearfield::CaptureSphere;
+use lumiview::nearfield::Scan;
 use serde_json::{json, Value};
 
 use super::{print_report, CliResult};
 
-/// `lumiview rays2scan`: bin a TM-25 ray file into the luminance images of a virtual scan.
+/// `lumiview rays2scan`: turn a TM-25 ray file into the luminance images of a virtual scan.
 #[derive(Args, Debug)]
 pub struct Rays2scanArgs {
     /// IES TM-25 ray file (.tm25ray).
     pub file: PathBuf,
     /// Output: a directory, or the scan manifest path (`…/scan.json`) whose directory receives it.
+    /// With `--method kde` the proxy mesh from the ray origins is written beside it as `proxy.glb`.
     #[arg(short = 'o', long = "output", value_name = "DIR|scan.json")]
     pub output: PathBuf,
-    /// Camera layout: `fibonacci:N`, `grid:P,T` (P meridians × T rows, poles once) or `rigo:N`
-    /// (N cameras per hemisphere, meridians, 2° overlap, 0.05° jitter).
-    #[arg(long, default_value = "fibonacci:1000", value_name = "KIND:N")]
-    pub layout: String,
-    /// Capture sphere radius in metres.
-    #[arg(long, default_value_t = 1.1, value_name = "M")]
-    pub radius: f64,
-    /// Capture sphere centre `X,Y,Z` in metres, in the ray file's frame.
-    #[arg(long, default_value = "0,0,0", value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub centre: String,
-    /// Image size in pixels, `WxH`.
-    #[arg(long, default_value = "64x64", value_name = "WxH")]
-    pub size: String,
-    /// Full horizontal field of view in degrees (square pixels), or `auto` to fit every ray.
-    #[arg(long, default_value = "auto", value_name = "DEG|auto")]
-    pub fov: String,
-    /// Seed of the layout's jitter (`rigo`).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// `kde`: a kernel density estimate of the light field with kernels, cameras and image size
+    /// chosen from the data (docs/rayfiles.md); `histogram`: each ray into the pixel of its
+    /// nearest camera (noisy unless millions of rays land in each camera).
+    #[arg(long, default_value = "kde", value_name = "kde|histogram")]
+    pub method: String,
+    /// kde: rays per spatial kernel (default 8·√N: noise about 1/√ of it).
+    #[arg(long, value_name = "K")]
+    pub rays_per_kernel: Option<f64>,
+    /// kde: rays per intensity kernel (default 0.5·N^(2/3)).
+    #[arg(long, value_name = "K")]
+    pub rays_per_intensity_kernel: Option<f64>,
+    /// kde: a fixed intensity kernel half-width in degrees instead of the adaptive one.
+    #[arg(long, value_name = "DEG")]
+    pub angular_kernel: Option<f64>,
+    /// kde: a fixed spatial kernel σ in millimetres instead of the adaptive one.
+    #[arg(long, value_name = "MM")]
+    pub spatial_kernel: Option<f64>,
+    /// kde: number of virtual cameras (default: from the angular kernel).
+    #[arg(long, value_name = "N")]
+    pub cameras: Option<usize>,
+    /// kde: image side in pixels (default: from the spatial kernel).
+    #[arg(long, value_name = "PX")]
+    pub image_px: Option<u32>,
+    /// histogram: camera layout: `fibonacci:N`, `grid:P,T` (P meridians × T rows, poles once) or
+    /// `rigo:N` (N cameras per hemisphere, meridians, 2° overlap, 0.05° jitter); default fibonacci:1000.
+    #[arg(long, value_name = "KIND:N")]
+    pub layout: Option<String>,
+    /// Capture sphere radius in metres (kde default: max(1.1, 8 × the source's radius); histogram:
+    /// 1.1).
+    #[arg(long, value_name = "M")]
+    pub radius: Option<f64>,
+    /// histogram: capture sphere centre `X,Y,Z` in metres, in the ray file's frame (kde: the centre
+    /// of the ray origins).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub centre: Option<String>,
+    /// histogram: image size in pixels, `WxH` (default 64x64).
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// histogram: full horizontal field of view in degrees (square pixels), or `auto` to fit every ray.
+    #[arg(long, value_name = "DEG|auto")]
+    pub fov: Option<String>,
+    /// histogram: seed of the layout's jitter (`rigo`).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Scale the rays' luminous fluxes to sum to the header's luminous flux.
     #[arg(long)]
     pub scale_to_header_flux: bool,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Bin and report, but write nothing.
+    /// Estimate and report, but write nothing.
     #[arg(long)]
     pub dry_run: bool,
+    /// kde: render the estimate orthographically on the GPU at the centres of the 5° direction
+    /// bins every 15° of C and compare the intensity with the rays binned by direction (cd);
+    /// prints the median and 95th percentile error over the bins holding ≥ 1 % of the peak.
+    #[arg(long)]
+    pub check: bool,
 }
 
 /// Parses `X,Y,Z`.
@@ -453,10 +486,10 @@ fn output_dir(output: &Path) -> PathBuf {
 
 /// Writes the binned scan (`manifest.json` + `images/NNNNN.pf`) into `dir`; when `-o` named a
 /// `.json` file other than `manifest.json`, the manifest is renamed to it. Returns the manifest path.
-fn write_binned(dir: &Path, output: &Path, binned: &BinnedScan) -> Result<PathBuf, Box<dyn std::error::Error>> {
-    let n = binned.scan.set.cameras.len() as u64;
+fn write_scan_files(dir: &Path, output: &Path, scan: &Scan) -> Result<PathBuf, Box<dyn std::error::Error>> {
+    let n = scan.set.cameras.len() as u64;
     let bar = indicatif::ProgressBar::new(n);
-    let manifest = lumiview::nearfield::manifest::write_scan(dir, &binned.scan, &|done, _| {
+    let manifest = lumiview::nearfield::manifest::write_scan(dir, scan, &|done, _| {
         bar.set_position(done as u64);
     })?;
     bar.finish_and_clear();
@@ -471,28 +504,48 @@ fn write_binned(dir: &Path, output: &Path, binned: &BinnedScan) -> Result<PathBu
 
 /// `lumiview rays2scan`.
 pub fn rays2scan(args: &Rays2scanArgs) -> CliResult {
-    let layout = crate::commands::parse_layout(&args.layout)?;
-    let (width, height) = crate::commands::parse_size_px(&args.size)?;
-    let centre = parse_centre(&args.centre)?;
-    let fov_deg = if args.fov.trim().eq_ignore_ascii_case("auto") {
+    match args.method.as_str() {
+        "kde" => rays2scan_kde(args),
+        "histogram" => rays2scan_histogram(args),
+        m => Err(format!("--method `{m}`: expected kde or histogram").into()),
+    }
+}
+
+fn rays2scan_histogram(args: &Rays2scanArgs) -> CliResult {
+    for (given, name) in [
+        (args.rays_per_kernel.is_some(), "--rays-per-kernel"),
+        (args.rays_per_intensity_kernel.is_some(), "--rays-per-intensity-kernel"),
+        (args.angular_kernel.is_some(), "--angular-kernel"),
+        (args.spatial_kernel.is_some(), "--spatial-kernel"),
+        (args.cameras.is_some(), "--cameras"),
+        (args.image_px.is_some(), "--image-px"),
+    ] {
+        if given {
+            return Err(format!("{name} applies to --method kde").into());
+        }
+    }
+    let layout = crate::commands::parse_layout(args.layout.as_deref().unwrap_or("fibonacci:1000"))?;
+    let (width, height) = crate::commands::parse_size_px(args.size.as_deref().unwrap_or("64x64"))?;
+    let centre = parse_centre(args.centre.as_deref().unwrap_or("0,0,0"))?;
+    let fov = args.fov.as_deref().unwrap_or("auto");
+    let fov_deg = if fov.trim().eq_ignore_ascii_case("auto") {
         None
     } else {
         Some(
-            args.fov
-                .trim()
+            fov.trim()
                 .parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
-                .ok_or_else(|| format!("--fov `{}`: expected degrees or `auto`", args.fov))?,
+                .ok_or_else(|| format!("--fov `{fov}`: expected degrees or `auto`"))?,
         )
     };
     let opts = BinningOptions {
         sphere: CaptureSphere {
             centre_m: centre,
-            radius_m: args.radius,
+            radius_m: args.radius.unwrap_or(1.1),
         },
         layout,
-        seed: args.seed,
+        seed: args.seed.unwrap_or(0),
         width,
         height,
         fov_deg,
@@ -500,19 +553,195 @@ pub fn rays2scan(args: &Rays2scanArgs) -> CliResult {
     };
     let file = RayFile::read(&args.file)?;
     let binned = bin_rays(&file, &opts)?;
+    let r = &binned.report;
+    for w in sparse_warnings(&args.file, r) {
+        eprintln!("lumiview: warning: {w}");
+    }
     let dir = output_dir(&args.output);
     let written = if args.dry_run {
         None
     } else {
-        Some(write_binned(&dir, &args.output, &binned)?)
+        Some(write_scan_files(&dir, &args.output, &binned.scan)?)
     };
-    let r = &binned.report;
     if args.json {
         let v = report_json(&args.file, written.as_deref(), r);
         print_report(&format!("{}\n", serde_json::to_string_pretty(&v)?))
     } else {
         print_report(&report_text(&args.file, written.as_deref(), r))
     }
+}
+
+/// Warnings when a histogram is too sparse to show the source.
+fn sparse_warnings(file: &Path, r: &BinningReport) -> Vec<String> {
+    let mut w = Vec::new();
+    let cams = r.rays_per_camera.len().max(1);
+    let empty = r.cameras_with_zero_rays.saturating_sub(r.cameras_merged);
+    if empty * 10 > cams {
+        w.push(format!(
+            "{}: {empty} of {cams} cameras ({:.0} %) received no ray: views near them show nothing \
+             (--method kde estimates every camera from its neighbours' rays)",
+            file.display(),
+            100.0 * empty as f64 / cams as f64
+        ));
+    }
+    if r.rays_per_lit_pixel_median < 10.0 && r.lit_pixels > 0 {
+        w.push(format!(
+            "{}: a median of {:.1} rays per lit pixel: the images are speckle, not the source (--method kde)",
+            file.display(),
+            r.rays_per_lit_pixel_median
+        ));
+    }
+    w
+}
+
+fn rays2scan_kde(args: &Rays2scanArgs) -> CliResult {
+    for (given, name) in [
+        (args.layout.is_some(), "--layout"),
+        (args.centre.is_some(), "--centre"),
+        (args.size.is_some(), "--size"),
+        (args.fov.is_some(), "--fov"),
+        (args.seed.is_some(), "--seed"),
+    ] {
+        if given {
+            return Err(format!(
+                "{name} applies to --method histogram (kde chooses the layout and images from the data; see \
+                 --cameras and --image-px)"
+            )
+            .into());
+        }
+    }
+    let opts = KdeOptions {
+        rays_per_kernel: args.rays_per_kernel,
+        rays_per_intensity_kernel: args.rays_per_intensity_kernel,
+        angular_kernel_deg: args.angular_kernel,
+        spatial_kernel_m: args.spatial_kernel.map(|mm| mm / 1000.0),
+        cameras: args.cameras,
+        image_px: args.image_px,
+        radius_m: args.radius,
+        scale_to_header_flux: args.scale_to_header_flux,
+    };
+    let file = RayFile::read(&args.file)?;
+    let bar = indicatif::ProgressBar::new(1000);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg:>18} [{bar:40}] {percent:>3} %")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let est = estimate(&file, &opts, &|stage, f| {
+        bar.set_message(stage.to_string());
+        bar.set_position((f * 1000.0) as u64);
+    })?;
+    bar.finish_and_clear();
+    for w in &est.report.warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    let dir = output_dir(&args.output);
+    let written = if args.dry_run {
+        None
+    } else {
+        let m = write_scan_files(&dir, &args.output, &est.scan)?;
+        est.proxy.write_glb(&dir.join("proxy.glb"))?;
+        Some(m)
+    };
+    if args.check {
+        let mut renderer = lumiview::gpu::Renderer::new(&lumiview::gpu::ContextDesc::default())?;
+        let tmp = std::env::temp_dir().join(format!("lumiview-check-{}.lvpack", std::process::id()));
+        let r = est.report.clone();
+        let result = lumiview::eval::rays::check_intensity(&mut renderer, &file, est, &tmp, 15.0, &|m| {
+            eprintln!("lumiview: {m}");
+        });
+        let _ = std::fs::remove_file(&tmp);
+        let c = result?;
+        if args.json {
+            let mut v = serde_json::to_value(&r)?;
+            v["file"] = json!(args.file.display().to_string());
+            v["check"] = serde_json::to_value(&c)?;
+            return print_report(&format!("{}\n", serde_json::to_string_pretty(&v)?));
+        }
+        let mut t = kde_text(&args.file, written.as_deref(), &r, &dir);
+        t.push_str(&format!(
+            "far field         {} bins of 5° compared (≥ 1 % of the peak {:.4} cd): |render / rays − 1| median {:.2} %, \
+             95th percentile {:.2} % (the rays' own noise per bin: median {:.2} %)\n",
+            c.counted,
+            c.peak_cd,
+            100.0 * c.median_rel,
+            100.0 * c.p95_rel,
+            100.0 * c.median_reference_noise
+        ));
+        t.push_str(&format!(
+            "far field, rings  {} γ rings of 5° (the mean over C, ≥ 1 % of the peak): median {:.2} %, 95th percentile \
+             {:.2} %\n",
+            c.rings.len(),
+            100.0 * c.ring_median_rel,
+            100.0 * c.ring_p95_rel
+        ));
+        return print_report(&t);
+    }
+    let r = &est.report;
+    if args.json {
+        let mut v = serde_json::to_value(r)?;
+        v["file"] = json!(args.file.display().to_string());
+        v["manifest"] = json!(written.as_ref().map(|p| p.display().to_string()));
+        v["proxy"] = json!(written.as_ref().map(|_| dir.join("proxy.glb").display().to_string()));
+        return print_report(&format!("{}\n", serde_json::to_string_pretty(&v)?));
+    }
+    print_report(&kde_text(&args.file, written.as_deref(), r, &dir))
+}
+
+/// The text report of a kernel estimate.
+fn kde_text(file: &Path, written: Option<&Path>, r: &lumiview::nearfield::raykde::KdeReport, dir: &Path) -> String {
+    let mut t = String::new();
+    t.push_str(&format!("ray file          {}\n", file.display()));
+    t.push_str(&format!(
+        "rays              {} ({:.0} effective), {:.6} lm\n",
+        r.rays, r.effective_rays, r.flux_lm
+    ));
+    t.push_str(&format!(
+        "kernels           {:.0} rays per intensity kernel, {:.0} per spatial kernel of a footprint pooled from {:.0}\n",
+        r.rays_per_intensity_kernel, r.rays_per_kernel, r.rays_per_angular_kernel
+    ));
+    let s = &r.angular_kernel_deg;
+    t.push_str(&format!(
+        "intensity kernel  half-width {:.2}° median ({:.2}°–{:.2}°, 10–90 % of the flux)\n",
+        s.median, s.p10, s.p90
+    ));
+    let s = &r.footprint_kernel_deg;
+    t.push_str(&format!(
+        "footprint pool    half-width {:.2}° median ({:.2}°–{:.2}°)\n",
+        s.median, s.p10, s.p90
+    ));
+    let s = &r.spatial_kernel_m;
+    t.push_str(&format!(
+        "spatial kernel    σ {:.3} mm median ({:.3}–{:.3} mm)\n",
+        s.median * 1e3,
+        s.p10 * 1e3,
+        s.p90 * 1e3
+    ));
+    t.push_str(&format!(
+        "virtual scan      {} cameras ({} lit) on a {:.3} m sphere, {}² px, fov {:.3}°, {:.4} mm per pixel\n",
+        r.cameras,
+        r.cameras_lit,
+        r.radius_m,
+        r.image_px,
+        r.fov_deg,
+        r.pixel_m * 1e3
+    ));
+    t.push_str(&format!(
+        "flux              {:.6} lm in the cameras' quadrature of the estimate ({:.2} % of the rays')\n",
+        r.flux_from_images_lm,
+        100.0 * r.flux_from_images_lm / r.flux_lm
+    ));
+    t.push_str(&format!(
+        "source            radius {:.3} mm about the origins' centre\n",
+        r.source_radius_m * 1e3
+    ));
+    if let Some(m) = written {
+        t.push_str(&format!(
+            "wrote             {} and {}\n",
+            m.display(),
+            dir.join("proxy.glb").display()
+        ));
+    }
+    t
 }
 
 #[cfg(test)]

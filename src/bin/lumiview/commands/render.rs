@@ -31,14 +31,11 @@ pub struct RenderArgs {
     #[arg(short = 'o', long = "output")]
     pub output: PathBuf,
     /// Eye position as photometric angles and distance: C,GAMMA,DIST (degrees, degrees, metres),
-    /// looking at the photometric centre. γ = 0 is straight below (nadir).
-    #[arg(
-        long = "from",
-        default_value = "30,60,2",
-        allow_hyphen_values = true,
-        value_name = "C,GAMMA,DIST"
-    )]
-    pub from: String,
+    /// looking at the photometric centre. γ = 0 is straight below (nadir). Default: 30,60,2 for a
+    /// photometric file; for a scan, from the direction its brightest camera looks from, so far
+    /// that what the cameras saw fills about half the field of view (at least 2 cm).
+    #[arg(long = "from", allow_hyphen_values = true, value_name = "C,GAMMA,DIST")]
+    pub from: Option<String>,
     /// Eye position in the luminaire frame, metres: EX,EY,EZ, or EX,EY,EZ,TX,TY,TZ to look at the point
     /// T (default: the photometric centre, or a scan's capture centre). Overrides --from.
     #[arg(long, allow_hyphen_values = true, value_name = "EX,EY,EZ[,TX,TY,TZ]")]
@@ -46,15 +43,20 @@ pub struct RenderArgs {
     /// Near-field selection: nearest, idw4 or continuous.
     #[arg(long, default_value = "continuous")]
     pub mode: String,
-    /// Near-field proxy mesh (glTF 2.0, luminaire frame) for parallax-correct reprojection.
+    /// Draw a scan without any proxy mesh, not even the one its .lvpack stores.
+    #[arg(long)]
+    pub no_proxy: bool,
+    /// Near-field proxy mesh (glTF 2.0, luminaire frame) for parallax-correct reprojection
+    /// (default: the one the scan's .lvpack stores, e.g. a ray file's hull of its ray origins).
     #[arg(long, value_name = "FILE.glb")]
     pub proxy: Option<PathBuf>,
     /// GPU budget of a near-field scan in MiB (tiles beyond it are streamed per view).
     #[arg(long, default_value_t = 512)]
     pub budget_mib: u64,
-    /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = 30.0)]
-    pub fov: f32,
+    /// Vertical field of view in degrees (default 30; from a scan's default eye, narrower where
+    /// the source is so small that 2 cm away it would fill less than half of 30°).
+    #[arg(long)]
+    pub fov: Option<f32>,
     /// Image size WxH in pixels.
     #[arg(long, default_value = "640x480")]
     pub size: String,
@@ -143,19 +145,27 @@ struct Loaded {
     /// Luminance (cd/m²) that maps to 0.5 by default; `None`: measure it from a first render.
     l_ref: Option<f64>,
     target: Vec3,
+    /// The eye when neither --from nor --camera is given (scans), else `None` (30,60,2).
+    default_eye: Option<Vec3>,
+    /// The field of view with that eye when --fov is not given and 30° would not frame it.
+    default_fov: Option<f32>,
     what: String,
 }
 
 /// Runs `lumiview render`.
 pub fn render(a: &RenderArgs) -> CliResult {
-    let (c, g, dist) = parse_from(&a.from)?;
+    let (c, g, dist) = parse_from(a.from.as_deref().unwrap_or("30,60,2"))?;
+    if a.no_proxy && a.proxy.is_some() {
+        return Err("--no-proxy and --proxy contradict each other".into());
+    }
     let (w, h) = a
         .size
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
         .ok_or_else(|| format!("--size '{}': expected WxH", a.size))?;
-    if !(a.fov.is_finite() && a.fov > 0.1 && a.fov < 179.0) {
-        return Err(format!("--fov {}: expected 0.1…179 degrees", a.fov).into());
+    let fov_given = a.fov.unwrap_or(30.0);
+    if !(fov_given.is_finite() && (1e-4..179.0).contains(&fov_given)) {
+        return Err(format!("--fov {fov_given}: expected 0.0001…179 degrees").into());
     }
     let camera = a.camera.as_deref().map(parse_camera).transpose()?;
     let mode = parse_mode(&a.mode)?;
@@ -213,9 +223,9 @@ pub fn render(a: &RenderArgs) -> CliResult {
             None
         }
         None => {
-            if a.proxy.is_some() {
+            if a.proxy.is_some() || a.no_proxy {
                 return Err(format!(
-                    "--proxy applies to near-field scans; {} is a photometric file",
+                    "--proxy / --no-proxy apply to near-field scans; {} is a photometric file",
                     a.file.display()
                 )
                 .into());
@@ -248,10 +258,51 @@ pub fn render(a: &RenderArgs) -> CliResult {
             let (pack, cached) = open_scan_of_kind(&a.file, kind, None)?;
             let centre = pack.rayset().sphere.centre_m.as_vec3();
             let cameras = pack.image_count();
-            let proxy = a.proxy.as_deref().map(load_gltf).transpose()?;
+            // The user's mesh, else the pack's own (a ray file's grown hull bounds the light).
+            let (proxy, bound, proxy_what) = if a.no_proxy {
+                (None, false, String::new())
+            } else if let Some(path) = a.proxy.as_deref() {
+                (Some(load_gltf(path)?), false, format!(" with proxy {}", path.display()))
+            } else if let Some(p) = pack.proxy() {
+                (
+                    Some(p.triangles.clone()),
+                    p.bound,
+                    format!(" with the scan's proxy ({})", p.source),
+                )
+            } else {
+                (None, false, String::new())
+            };
             let has_proxy = proxy.is_some();
+            // Where the eye goes by default: the direction the brightest camera looks from, far
+            // enough that what the cameras saw (the proxy, else their content) fills about half
+            // the field of view.
+            let reach = pack
+                .proxy()
+                .map(|p| {
+                    let c = pack.rayset().sphere.centre_m;
+                    p.triangles
+                        .iter()
+                        .map(|v| (glam::DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])) - c).length())
+                        .fold(0.0, f64::max)
+                })
+                .unwrap_or_else(|| lumiview::gpu::nearfield::content_radius_m(&pack));
+            let half = f64::from(fov_given).to_radians() / 2.0;
+            let eye_distance = (2.0 * reach / half.tan()).max(0.02);
+            // A source too small to fill half the view from 2 cm gets a narrower view instead.
+            let default_fov = (a.fov.is_none() && 2.0 * reach / half.tan() < 0.02)
+                .then(|| (2.0 * (2.0 * reach / 0.02).atan()).to_degrees().max(1e-3) as f32);
+            let brightest = pack
+                .images()
+                .iter()
+                .enumerate()
+                .max_by(|x, y| {
+                    let w = |e: &lumiview::nearfield::pack::ImageEntry| f64::from(e.max_cd_m2) * f64::from(e.tiles);
+                    w(x.1).total_cmp(&w(y.1))
+                })
+                .map(|(i, _)| pack.rayset().cameras[i].direction_from(pack.rayset().sphere.centre_m));
             let opts = NearfieldOptions {
                 budget_bytes: a.budget_mib.saturating_mul(1 << 20),
+                proxy_is_bound: bound,
                 ..NearfieldOptions::default()
             };
             let lum = r.add_pack(std::sync::Arc::new(pack), proxy, &opts)?;
@@ -260,10 +311,12 @@ pub fn render(a: &RenderArgs) -> CliResult {
             Loaded {
                 l_ref: None,
                 target: centre,
+                default_eye: brightest.map(|d| centre + d.as_vec3() * eye_distance as f32),
+                default_fov,
                 what: format!(
                     "near-field scan, {cameras} cameras, {} selection{}{}",
                     a.mode,
-                    if has_proxy { " with proxy" } else { ", no proxy" },
+                    if has_proxy { proxy_what.as_str() } else { ", no proxy" },
                     cached.map_or(String::new(), |p| format!(" (packed into {})", p.display()))
                 ),
             }
@@ -275,6 +328,8 @@ pub fn render(a: &RenderArgs) -> CliResult {
             Loaded {
                 l_ref: Some(l_here),
                 target: Vec3::ZERO,
+                default_eye: None,
+                default_fov: None,
                 what: format!("far-field, L = {l_here:.1} cd/m² at the centre"),
             }
         }
@@ -296,9 +351,14 @@ pub fn render(a: &RenderArgs) -> CliResult {
             semaphores: false,
         },
     )?;
-    let (eye, target) = match camera {
-        Some((e, t)) => (e, t.unwrap_or(loaded.target)),
-        None => {
+    let mut fov = fov_given;
+    let (eye, target) = match (camera, loaded.default_eye) {
+        (Some((e, t)), _) => (e, t.unwrap_or(loaded.target)),
+        (None, Some(e)) if a.from.is_none() => {
+            fov = loaded.default_fov.unwrap_or(fov);
+            (e, loaded.target)
+        }
+        (None, _) => {
             let d = direction(c, g);
             (
                 loaded.target + Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * dist as f32,
@@ -317,7 +377,12 @@ pub fn render(a: &RenderArgs) -> CliResult {
     };
     let cam = HostCamera {
         view: look_at(eye, target, up),
-        projection: perspective(a.fov.to_radians(), w as f32 / h as f32, 0.01, 100.0),
+        projection: perspective(
+            fov.to_radians(),
+            w as f32 / h as f32,
+            (0.1 * fwd.length()).min(0.01),
+            100.0,
+        ),
         depth_range: DepthRange::ZeroToOne,
         reversed_z: false,
         origin: Origin::TopLeft,
@@ -395,7 +460,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
             .map_err(|e| format!("{}: {e}", a.output.display()))?;
     }
     println!(
-        "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m; {}; {}; {} ({})",
+        "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m, fov {fov}°; {}; {}; {} ({})",
         a.output.display(),
         eye.x,
         eye.y,

@@ -1,0 +1,211 @@
+//! Ray files against their own far field: the luminous intensity a ray set holds, binned by
+//! direction on a 5° (C, γ) grid, compared with the intensity read from orthographic GPU renders of
+//! its kernel estimate (`nearfield::raykde`), Î(ω) = Σ L · p² over a view along −ω.
+//!
+//! The binned reference has its own noise: a bin holding n rays is uncertain by about 1/√n, so
+//! each row reports n, and the summary gives the errors over the bins the contract counts (those
+//! holding ≥ 1 % of the peak bin's intensity) with the reference's expected noise beside them.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DVec3, Mat4};
+
+use super::{ortho_intensity, EvalError};
+use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
+use crate::gpu::Renderer;
+use crate::nearfield::pack::{write_pack, Pack, PackOptions};
+use crate::nearfield::proxy::triangles_of;
+use crate::nearfield::raykde::KdeScan;
+use crate::nearfield::select::SelectionMode;
+use crate::nearfield::tm25::RayFile;
+use crate::photometry::web::{angles_of, direction};
+
+/// Bin width of the reference, degrees (C and γ).
+pub const BIN_DEG: f64 = 5.0;
+
+/// One compared direction.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct IntensityRow {
+    /// C of the bin centre, degrees.
+    pub c_deg: f64,
+    /// γ of the bin centre, degrees.
+    pub gamma_deg: f64,
+    /// The rays' intensity: flux in the bin / its solid angle (cd).
+    pub rays_cd: f64,
+    /// Rays in the bin.
+    pub rays_in_bin: u64,
+    /// The render's Σ L · p² (cd).
+    pub render_cd: f64,
+}
+
+/// The comparison over a ray file's far field.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct IntensityCheck {
+    /// Every compared bin.
+    pub rows: Vec<IntensityRow>,
+    /// The peak binned intensity (cd).
+    pub peak_cd: f64,
+    /// Bins at or above 1 % of the peak.
+    pub counted: usize,
+    /// Median of |render / rays − 1| over the counted bins.
+    pub median_rel: f64,
+    /// 95th percentile of the same.
+    pub p95_rel: f64,
+    /// Median over the counted bins of the reference's own relative noise, 1/√n.
+    pub median_reference_noise: f64,
+    /// Per 5° γ ring holding ≥ 1 % of the peak ring intensity: (γ centre, the rays' mean
+    /// intensity over the ring, the renders' mean over the ring's compared bins, rays in the ring).
+    pub rings: Vec<(f64, f64, f64, u64)>,
+    /// Median of |render / rays − 1| over the rings (far less noisy than single bins).
+    pub ring_median_rel: f64,
+    /// 95th percentile of the same.
+    pub ring_p95_rel: f64,
+}
+
+/// The rays' intensity per 5° (C, γ) bin: (flux / solid angle in cd, ray count) indexed
+/// `[ic * 36 + ig]`.
+pub fn binned_intensity(file: &RayFile) -> Vec<(f64, u64)> {
+    let nc = (360.0 / BIN_DEG) as usize;
+    let ng = (180.0 / BIN_DEG) as usize;
+    let mut flux = vec![(0.0f64, 0u64); nc * ng];
+    for i in 0..file.len() {
+        let Some(r) = file.ray(i) else { continue };
+        let Some(f) = r.luminous_lm.filter(|f| *f > 0.0 && f.is_finite()) else {
+            continue;
+        };
+        let (c, g) = angles_of(r.direction.to_array());
+        let ic = ((c / BIN_DEG) as usize).min(nc - 1);
+        let ig = ((g / BIN_DEG) as usize).min(ng - 1);
+        let b = &mut flux[ic * ng + ig];
+        b.0 += f;
+        b.1 += 1;
+    }
+    for ic in 0..nc {
+        for ig in 0..ng {
+            let (g0, g1) = (
+                (ig as f64 * BIN_DEG).to_radians(),
+                ((ig + 1) as f64 * BIN_DEG).to_radians(),
+            );
+            let omega = BIN_DEG.to_radians() * (g0.cos() - g1.cos());
+            flux[ic * ng + ig].0 /= omega;
+        }
+    }
+    flux
+}
+
+/// Packs the estimate into `pack_path`, renders orthographic views at the centres of the bins in
+/// every `c_step_deg`-th C column (a multiple of 5°), and compares them with the binned rays.
+///
+/// # Errors
+/// GPU or pack failures ([`EvalError`]).
+pub fn check_intensity(
+    r: &mut Renderer,
+    file: &RayFile,
+    est: KdeScan,
+    pack_path: &Path,
+    c_step_deg: f64,
+    progress: &dyn Fn(&str),
+) -> Result<IntensityCheck, EvalError> {
+    let proxy = triangles_of(&est.proxy);
+    let rb = est
+        .proxy
+        .surfaces
+        .iter()
+        .flat_map(|s| s.positions.iter())
+        .map(|p| (*p - est.scan.set.sphere.centre_m).length())
+        .fold(0.0, f64::max)
+        * 1.02;
+    let centre = est.scan.set.sphere.centre_m;
+    progress("packing the estimate");
+    write_pack(&est.scan, pack_path, &PackOptions::default(), &|_, _| {})?;
+    let pack = Arc::new(Pack::open(pack_path)?);
+    let opts = NearfieldOptions {
+        budget_bytes: 2 << 30,
+        proxy_is_bound: true,
+        ..NearfieldOptions::default()
+    };
+    let id = r.add_pack(pack, Some(proxy), &opts)?;
+    let inst = r.add_instance(id, Mat4::IDENTITY)?;
+    r.set_nearfield_settings(
+        inst,
+        NearfieldSettings {
+            mode: SelectionMode::Continuous,
+            proxy: true,
+        },
+    )?;
+    let binned = binned_intensity(file);
+    let ng = (180.0 / BIN_DEG) as usize;
+    let peak_cd = binned.iter().map(|b| b.0).fold(0.0, f64::max);
+    let step = ((c_step_deg / BIN_DEG).round() as usize).max(1);
+    let mut rows = Vec::new();
+    let mut targets = Vec::new();
+    let columns: Vec<usize> = (0..(360.0 / BIN_DEG) as usize).step_by(step).collect();
+    for (n, &ic) in columns.iter().enumerate() {
+        progress(&format!("rendering C column {} of {}", n + 1, columns.len()));
+        for ig in 0..ng {
+            let (i_rays, count) = binned[ic * ng + ig];
+            if i_rays < 0.01 * peak_cd {
+                continue;
+            }
+            let (c, g) = ((ic as f64 + 0.5) * BIN_DEG, (ig as f64 + 0.5) * BIN_DEG);
+            let d = direction(c, g);
+            let w = DVec3::new(d[0], d[1], d[2]);
+            let i_render = ortho_intensity(r, &mut targets, w, centre, rb, 96)?;
+            rows.push(IntensityRow {
+                c_deg: c,
+                gamma_deg: g,
+                rays_cd: i_rays,
+                rays_in_bin: count,
+                render_cd: i_render,
+            });
+        }
+    }
+    r.remove_luminaire(id)?;
+    let mut rel: Vec<f64> = rows.iter().map(|r| (r.render_cd / r.rays_cd - 1.0).abs()).collect();
+    let mut noise: Vec<f64> = rows
+        .iter()
+        .map(|r| 1.0 / (r.rays_in_bin.max(1) as f64).sqrt())
+        .collect();
+    // Rings: the rays' flux over all C of a γ band over its solid angle, against the mean of the
+    // renders in that band (every compared C column).
+    let nc = (360.0 / BIN_DEG) as usize;
+    let mut rings = Vec::new();
+    let ring_peak = (0..ng)
+        .map(|ig| (0..nc).map(|ic| binned[ic * ng + ig].0).sum::<f64>() / nc as f64)
+        .fold(0.0, f64::max);
+    for ig in 0..ng {
+        let i_ring = (0..nc).map(|ic| binned[ic * ng + ig].0).sum::<f64>() / nc as f64;
+        let n_ring: u64 = (0..nc).map(|ic| binned[ic * ng + ig].1).sum();
+        let g = (ig as f64 + 0.5) * BIN_DEG;
+        let rendered: Vec<f64> = rows
+            .iter()
+            .filter(|r| (r.gamma_deg - g).abs() < 1e-9)
+            .map(|r| r.render_cd)
+            .collect();
+        // Only rings whose every compared column was rendered (all above 1 % of the peak bin).
+        if i_ring >= 0.01 * ring_peak && rendered.len() == columns.len() {
+            let mean = rendered.iter().sum::<f64>() / rendered.len() as f64;
+            rings.push((g, i_ring, mean, n_ring));
+        }
+    }
+    let mut ring_rel: Vec<f64> = rings.iter().map(|(_, a, b, _)| (b / a - 1.0).abs()).collect();
+    let q = |v: &mut Vec<f64>, p: f64| {
+        if v.is_empty() {
+            return f64::NAN;
+        }
+        v.sort_by(f64::total_cmp);
+        v[((p * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)]
+    };
+    Ok(IntensityCheck {
+        counted: rows.len(),
+        median_rel: q(&mut rel, 0.5),
+        p95_rel: q(&mut rel, 0.95),
+        median_reference_noise: q(&mut noise, 0.5),
+        ring_median_rel: q(&mut ring_rel, 0.5),
+        ring_p95_rel: q(&mut ring_rel, 0.95),
+        rings,
+        rows,
+        peak_cd,
+    })
+}
