@@ -755,7 +755,9 @@ fn shade(in: VsOut) -> Shaded {
             }
         }
     }
-    if (PROXY && SELECTION == 2u && w_lit > 0.0) {
+    // A surface proxy: a camera that sampled no light where another sees it does not vote. A
+    // bounding proxy (lum.gap.z = 1, a ray file's hull): darkness is the estimate's own, it votes.
+    if (PROXY && SELECTION == 2u && w_lit > 0.0 && lum.gap.z < 0.5) {
         l = l_lit;
         wsum = w_lit;
         all_lit = true;

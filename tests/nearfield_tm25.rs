@@ -578,6 +578,8 @@ fn cli_rays2scan_reports() {
     let out = lumiview(&[
         "rays2scan",
         LED,
+        "--method",
+        "histogram",
         "-o",
         "target/rays2scan-test/scan.json",
         "--layout",
@@ -598,7 +600,17 @@ fn cli_rays2scan_reports() {
     let binned = v["flux_lm"]["used"].as_f64().unwrap();
     assert!(close(used, binned, 1e-5));
     assert!(v["rays"]["per_lit_pixel_median"].as_f64().unwrap() >= 1.0);
-    let bad = lumiview(&["rays2scan", LED, "-o", "x", "--layout", "hex:4", "--dry-run"]);
+    let bad = lumiview(&[
+        "rays2scan",
+        LED,
+        "--method",
+        "histogram",
+        "-o",
+        "x",
+        "--layout",
+        "hex:4",
+        "--dry-run",
+    ]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--layout `hex:4`"));
 }
 
@@ -612,6 +624,8 @@ fn cli_rays2scan_writes_a_loadable_scan() {
     let out = lumiview(&[
         "rays2scan",
         LED,
+        "--method",
+        "histogram",
         "-o",
         json_path.to_str().unwrap(),
         "--layout",

@@ -64,8 +64,9 @@ pub struct IntensityCheck {
 }
 
 /// The rays' intensity per 5° (C, γ) bin: (flux / solid angle in cd, ray count) indexed
-/// `[ic * 36 + ig]`.
-pub fn binned_intensity(file: &RayFile) -> Vec<(f64, u64)> {
+/// `[ic * 36 + ig]`, with every ray's flux times `flux_scale` (the estimate's scaling to the
+/// header's flux, or 1).
+pub fn binned_intensity(file: &RayFile, flux_scale: f64) -> Vec<(f64, u64)> {
     let nc = (360.0 / BIN_DEG) as usize;
     let ng = (180.0 / BIN_DEG) as usize;
     let mut flux = vec![(0.0f64, 0u64); nc * ng];
@@ -78,7 +79,7 @@ pub fn binned_intensity(file: &RayFile) -> Vec<(f64, u64)> {
         let ic = ((c / BIN_DEG) as usize).min(nc - 1);
         let ig = ((g / BIN_DEG) as usize).min(ng - 1);
         let b = &mut flux[ic * ng + ig];
-        b.0 += f;
+        b.0 += f * flux_scale;
         b.1 += 1;
     }
     for ic in 0..nc {
@@ -117,6 +118,7 @@ pub fn check_intensity(
         .fold(0.0, f64::max)
         * 1.02;
     let centre = est.scan.set.sphere.centre_m;
+    let flux_lm = est.report.flux_lm;
     progress("packing the estimate");
     write_pack(&est.scan, pack_path, &PackOptions::default(), &|_, _| {})?;
     let pack = Arc::new(Pack::open(pack_path)?);
@@ -134,7 +136,12 @@ pub fn check_intensity(
             proxy: true,
         },
     )?;
-    let binned = binned_intensity(file);
+    // The estimate may have scaled the rays to the header's flux: the reference follows.
+    let raw: f64 = (0..file.len())
+        .filter_map(|i| file.ray(i)?.luminous_lm)
+        .filter(|f| *f > 0.0 && f.is_finite())
+        .sum();
+    let binned = binned_intensity(file, if raw > 0.0 { flux_lm / raw } else { 1.0 });
     let ng = (180.0 / BIN_DEG) as usize;
     let peak_cd = binned.iter().map(|b| b.0).fold(0.0, f64::max);
     let step = ((c_step_deg / BIN_DEG).round() as usize).max(1);

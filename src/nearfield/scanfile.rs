@@ -98,6 +98,16 @@ pub fn kind_of(head: &[u8]) -> Option<ScanFileKind> {
 /// Errors: those of [`load_scan`], [`RayFile::read`] and [`raykde::estimate`], each naming the
 /// file; [`NearfieldError::InvalidArgument`] for [`ScanFileKind::Pack`].
 pub fn scan_from_file(path: &Path, kind: ScanFileKind) -> Result<(Scan, String, Option<PackProxy>)> {
+    scan_from_file_with_warnings(path, kind, &mut Vec::new())
+}
+
+/// [`scan_from_file`], appending what the caller should tell the user (a ray file's estimate:
+/// under-sampled directions, a coarse layout, ignored rays) to `warnings`.
+pub fn scan_from_file_with_warnings(
+    path: &Path,
+    kind: ScanFileKind,
+    warnings: &mut Vec<String>,
+) -> Result<(Scan, String, Option<PackProxy>)> {
     match kind {
         ScanFileKind::Pack => Err(NearfieldError::invalid(
             "kind",
@@ -114,6 +124,7 @@ pub fn scan_from_file(path: &Path, kind: ScanFileKind) -> Result<(Scan, String, 
         ScanFileKind::RayFile => {
             let rays = RayFile::read(path)?;
             let est = raykde::estimate(&rays, &raykde::KdeOptions::default(), &|_, _| {})?;
+            warnings.extend(est.report.warnings.iter().cloned());
             let r = &est.report;
             let desc = format!(
                 "TM-25 ray file {} as a kernel estimate ({} rays; intensity kernel {:.2}° median, spatial σ \
@@ -218,6 +229,17 @@ pub fn open_scan(path: &Path, cache_dir: Option<&Path>) -> Result<(Pack, Option<
 
 /// [`open_scan`] for a file whose kind is known (from [`detect`]).
 pub fn open_scan_of_kind(path: &Path, kind: ScanFileKind, cache_dir: Option<&Path>) -> Result<(Pack, Option<PathBuf>)> {
+    open_scan_of_kind_with_warnings(path, kind, cache_dir, &mut Vec::new())
+}
+
+/// [`open_scan_of_kind`], appending the warnings of a new estimate or import to `warnings` (a pack
+/// found in the cache adds none: they were given when it was made).
+pub fn open_scan_of_kind_with_warnings(
+    path: &Path,
+    kind: ScanFileKind,
+    cache_dir: Option<&Path>,
+    warnings: &mut Vec<String>,
+) -> Result<(Pack, Option<PathBuf>)> {
     if kind == ScanFileKind::Pack {
         return Ok((Pack::open(path)?, None));
     }
@@ -228,7 +250,7 @@ pub fn open_scan_of_kind(path: &Path, kind: ScanFileKind, cache_dir: Option<&Pat
             return Ok((p, Some(cached)));
         }
     }
-    let (scan, source, proxy) = scan_from_file(path, kind)?;
+    let (scan, source, proxy) = scan_from_file_with_warnings(path, kind, warnings)?;
     std::fs::create_dir_all(&dir).map_err(|e| NearfieldError::io(&dir, e))?;
     let nonce = std::time::SystemTime::now()
         .duration_since(UNIX_EPOCH)

@@ -488,7 +488,8 @@ impl Pack {
                     .proxy
                     .as_ref()
                     .ok_or_else(|| corrupt(format::METADATA, "no proxy entry for the proxy section".into()))?;
-                if meta.triangles != (triangles.len() / 3) as u64 || (meta.kind == "bound") != bound {
+                let kind_ok = matches!(meta.kind.as_str(), "bound" | "surface");
+                if !kind_ok || meta.triangles != (triangles.len() / 3) as u64 || (meta.kind == "bound") != bound {
                     return Err(corrupt(
                         format::METADATA,
                         "the proxy entry disagrees with the proxy section".into(),

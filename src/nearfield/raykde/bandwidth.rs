@@ -442,7 +442,7 @@ fn poisson(order: &[(f64, DVec3)], factor: f64, limit: usize) -> Option<Vec<DVec
     let mut grid: std::collections::HashMap<(usize, usize, usize), Vec<usize>> = std::collections::HashMap::new();
     let mut kept: Vec<DVec3> = Vec::new();
     for &(h, d) in order {
-        let r = factor * h;
+        let r = (factor * h).min(std::f64::consts::PI);
         let chord = 2.0 * (r / 2.0).sin();
         let span = ((chord / (2.0 / g as f64)).ceil() as isize).max(1);
         let (cx, cy, cz) = key(d);

@@ -3,31 +3,30 @@
 //! eye), with a proxy built from the ray origins.
 //!
 //! A ray set is a sample of the light field: ray r leaves point `x_r` in direction `k_r` carrying
-//! flux Φ_r, drawn (in a measurement) with density ∝ the luminance L(x, k) in line space. The
-//! estimate at camera i (direction `d_i` on a virtual capture sphere) and image point u is
+//! flux Φ_r, drawn (in a measurement) with density ∝ the luminance L(x, k) in line space. Camera i
+//! (direction `d_i` on a virtual capture sphere, pinhole projection `π_i`) gets the image
 //!
 //! ```text
-//!   L̂_i(u) = Σ_r Φ_r · K_a(∠(k_r, d_i); h_a,i) · K_s(u − π_i(x_r); h_s(u)) / A_px
+//!   L_i(u) = I_i · S_i(u) / A_px
+//!   I_i    = Σ_r Φ_r · K_a(∠(k_r, d_i); h_I,r)                                (cd)
+//!   S_i(u) = Σ_r Φ_r · K_a(∠(k_r, d_i); h_S,r) · K_s(u − π_i(x_r); σ) · (r_s / z_r)²  / Σ_r Φ_r · K_a(…; h_S,r)
 //! ```
 //!
-//! with `π_i` the camera's pinhole projection (the ray's origin, which lies on the emitting surface,
-//! is where camera i sees its light), `K_a` a normalised spherical Epanechnikov kernel (1/sr) and
-//! `K_s` a normalised spatial kernel (1/px), `A_px` a pixel's footprint (m²): lm/(sr·m²) = cd/m².
+//! a fine **intensity** times a normalised **footprint** pooled from a wider angular window.
+//! `K_a(θ; h)` is a spherical Epanechnikov kernel normalised over the sphere (1/sr), `K_s` the
+//! spatial kernel of an image pyramid ([`pyramid`]), `A_px` a pixel's footprint on the plane through
+//! the sphere's centre and `(r_s / z_r)²` corrects it to the ray's depth. The ray's **origin**, on
+//! the emitting surface, is where the camera sees its light.
 //!
-//! **Bandwidths** follow the data ([`bandwidth`]): with N_eff effective rays (Σ Φ)²/Σ Φ², a kernel
-//! holds k_s = B·√N_eff rays (B = 8 by default), so each estimate averages about k_s rays (noise
-//! ~ 1/√k_s) while both widths shrink as N_eff^(−1/8), the rate of a 4-D density estimate. The
-//! angular width at camera i is the k-nearest-neighbour angle holding k_a = √(k_s·N_eff) rays
-//! (the same share of the directions as k_s is of those rays' positions), capped at 3× the
-//! flux-weighted median; the spatial width at pixel u is the smallest level of an image pyramid whose
-//! neighbourhood of u holds k_s of the camera's rays ([`pyramid`]). Both are adaptive: dense
-//! directions and bright spots get narrow kernels, sparse ones wide kernels. Cameras are placed
-//! where the angular kernel needs them (spacing about half of it), so the renderer's interpolation
-//! between cameras adds little blur. Every kernel is normalised, so the estimate holds the rays'
-//! flux (up to kernel tails past the images); the cameras' quadrature of it is reported as a check.
-//!
-//! The widths chosen are reported ([`KdeReport`]) and kept per camera and pixel ([`KernelMaps`]) so
-//! a reference can be convolved with the same kernel (docs/quality-metrics.md, ray files).
+//! **Bandwidths** follow the data ([`bandwidth`]), each ray carrying the widths of its own direction
+//! (sample-point estimators: every kernel normalised per ray, the flux kept). With N_eff effective
+//! rays (Σ Φ)²/Σ Φ²: the intensity width holds k_I = 0.5·N_eff^(2/3) rays (a 2-D density's rate,
+//! width ∝ N^(−1/6)); the spatial kernel holds k_s = 8·√N_eff rays per pixel neighbourhood (noise
+//! ~1/√k_s, σ ∝ N^(−1/8), a 4-D density's rate) at the finest pyramid level that reaches them; the
+//! footprint pool holds k_S = √(k_s·N_eff) rays. Cameras sit about 0.7 intensity widths apart. The
+//! widths chosen are reported ([`KdeReport`]) and kept ([`KernelMaps`]) so a reference can be
+//! convolved with the same kernels (docs/quality-metrics.md, "Ray files"); docs/rayfiles.md has the
+//! rules and the measured figures.
 
 pub mod bandwidth;
 pub mod hull;
@@ -164,6 +163,8 @@ struct Gather<'a> {
     cells: &'a bandwidth::CellRays,
     rays: &'a Rays<'a>,
     k_s: f64,
+    /// Capture radius (m): the depth at which a pixel's footprint is `A_px`.
+    radius_m: f64,
 }
 
 impl Gather<'_> {
@@ -175,7 +176,7 @@ impl Gather<'_> {
         let mut pyr = Pyramid::new(px);
         // The intensity (lm/sr) from the intensity kernels; the footprint from the wider pool.
         let (mut intensity, mut ih, mut iw) = (0.0, 0.0, 0.0);
-        let (mut fh, mut fw) = (0.0, 0.0);
+        let (mut fh, mut fw, mut w_in) = (0.0, 0.0, 0.0);
         for (r, h, hi) in self.bw.rays_reaching(self.cells, dir) {
             let Some((x, kd, f)) = self.rays.get(r as usize) else {
                 continue;
@@ -191,17 +192,23 @@ impl Gather<'_> {
                 continue;
             }
             let a = 1.0 - (theta / h).powi(2);
-            let Some(uv) = k.project(cam.to_camera(x - cam.position_m)) else {
+            let xc = cam.to_camera(x - cam.position_m);
+            let Some(uv) = k.project(xc) else {
                 continue;
             };
             let w = f * a * angular_kernel(h);
-            pyr.splat(uv, w, a);
+            // A pixel's footprint at the ray's depth z is A_px · (z / r_s)²: the light spreads over
+            // that, so it counts (r_s / z)² towards the luminance.
+            let depth = (self.radius_m / xc.z.max(1e-9)).powi(2);
+            if pyr.splat(uv, w * depth, a) {
+                w_in += w;
+            }
             fh += w * h;
             fw += w;
         }
         let est = pyr.estimate(self.k_s, fixed_level);
-        let shape: f64 = est.density.iter().sum();
-        let scale = if shape > 0.0 { intensity / shape } else { 0.0 };
+        // Normalised so that Σ L · A_px(z) over the image is the intensity.
+        let scale = if w_in > 0.0 { intensity / w_in } else { 0.0 };
         let image = LuminanceImage {
             width: px,
             height: px,
@@ -236,6 +243,9 @@ pub struct KdeScan {
 struct Rays<'a> {
     file: &'a RayFile,
     scale: f64,
+    /// Rays starting farther than this from `centre` are outliers, left out (m).
+    reach: f64,
+    centre: DVec3,
 }
 
 impl Rays<'_> {
@@ -247,12 +257,41 @@ impl Rays<'_> {
     fn get(&self, i: usize) -> Option<(DVec3, DVec3, f64)> {
         let r = self.file.ray(i)?;
         let f = r.luminous_lm? * self.scale;
-        (f > 0.0 && f.is_finite() && r.position_m.is_finite() && r.direction.is_finite()).then_some((
+        let near = (r.position_m - self.centre).length() <= self.reach;
+        (f > 0.0 && f.is_finite() && r.position_m.is_finite() && r.direction.is_finite() && near).then_some((
             r.position_m,
             r.direction,
             f,
         ))
     }
+}
+
+/// The centre of the ray origins (per-axis median of an even sample of at most 2¹⁶) and the
+/// distance beyond which an origin is an outlier: 10 × the 99.9th percentile of the sample's
+/// distances from that centre, at least 1 cm.
+fn origin_reach(rays: &Rays<'_>) -> (DVec3, f64) {
+    let n = rays.len();
+    let stride = n.div_ceil(1 << 16).max(1);
+    let pts: Vec<DVec3> = (0..n)
+        .step_by(stride)
+        .filter_map(|i| rays.get(i).map(|r| r.0))
+        .collect();
+    if pts.is_empty() {
+        return (DVec3::ZERO, f64::INFINITY);
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let c = DVec3::new(
+        median(pts.iter().map(|p| p.x).collect()),
+        median(pts.iter().map(|p| p.y).collect()),
+        median(pts.iter().map(|p| p.z).collect()),
+    );
+    let mut d: Vec<f64> = pts.iter().map(|p| (*p - c).length()).collect();
+    d.sort_by(f64::total_cmp);
+    let q = d[((d.len() - 1) as f64 * 0.999) as usize];
+    (c, (10.0 * q).max(0.01))
 }
 
 /// Flux-weighted quantiles of `(value, weight)` pairs.
@@ -299,7 +338,22 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     }
     check_options(opts)?;
     let mut warnings = Vec::new();
-    let raw = Rays { file, scale: 1.0 };
+    let all = Rays {
+        file,
+        scale: 1.0,
+        reach: f64::INFINITY,
+        centre: DVec3::ZERO,
+    };
+    // Where the rays start: the per-axis median of an even sample of the origins, and the 99.9th
+    // percentile of their distance from it. Origins beyond 10 times that (and 1 cm) are outliers
+    // (one stray ray would otherwise set the image's field of view and empty every image).
+    let (centre, reach) = origin_reach(&all);
+    let raw = Rays {
+        file,
+        scale: 1.0,
+        reach,
+        centre,
+    };
     let (sum, sum2, count) = (0..raw.len())
         .into_par_iter()
         .filter_map(|i| raw.get(i))
@@ -324,14 +378,31 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     } else {
         1.0
     };
-    let rays = Rays { file, scale };
+    let rays = Rays {
+        file,
+        scale,
+        reach,
+        centre,
+    };
     let flux = sum * scale;
     let n_eff = sum * sum / sum2;
-    if (count as usize) < raw.len() {
+    let outliers = (0..all.len())
+        .into_par_iter()
+        .filter(|&i| all.get(i).is_some() && raw.get(i).is_none())
+        .count();
+    if outliers > 0 {
+        warnings.push(format!(
+            "{}: {outliers} rays start more than {:.6} m from the others' centre (10 × the 99.9th percentile of \
+             their distances): left out as outliers",
+            path.display(),
+            reach
+        ));
+    }
+    if (count as usize) + outliers < raw.len() {
         warnings.push(format!(
             "{}: {} of {} rays carry no usable luminous flux (zero, negative or not finite) and are ignored",
             path.display(),
-            raw.len() - count as usize,
+            raw.len() - count as usize - outliers,
             raw.len()
         ));
     }
@@ -381,9 +452,10 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         cells: &cells,
         rays: &rays,
         k_s,
+        radius_m: layout.radius_m,
     };
     // Image size: given, or from a pilot at 256 px of the brightest directions, so that the finer
-    // quarter of the light's kernels spans at least a pixel and a half.
+    // tenth of the light's kernels spans at least a pixel and a half.
     let px = match opts.image_px {
         Some(p) => p,
         None => {

@@ -2,9 +2,10 @@
 //! pixel, the finest level of an image pyramid whose neighbourhood holds `k_s` rays (a
 //! k-nearest-neighbour balloon estimator with a smooth, quantised-then-blended width).
 //!
-//! Level 0 is the bilinear splat (each ray shared among its four nearest pixel centres). Level k is
-//! level k−1 blurred by [1 2 1]/4 in x and y and summed over 2 × 2 blocks, so every level holds the
-//! same total; a level is read back at a base pixel by bilinear interpolation, divided by the 4^k base
+//! Level 0 is the bilinear splat (each ray shared among its four nearest pixel centres) on a grid of
+//! the next power of two ≥ the image side. Level k is level k−1 blurred by [1 2 1]/4 in x and y and
+//! summed over 2 × 2 blocks, so every level holds the same total (light spread past the image's own
+//! side is cut off there, as at any image border); a level is read back at a base pixel by bilinear interpolation, divided by the 4^k base
 //! pixels a level-k pixel covers. The resulting kernel is close to a Gaussian of σ ≈
 //! [`LEVEL_SIGMA_PX`] · 2^k base pixels (measured in the tests); a kernel that size holds about
 //! `4π σ²` pixels' worth of rays, which is how a level's ray count is judged. Between two levels
@@ -19,10 +20,13 @@ pub const LEVEL_SIGMA_PX: f64 = 0.7;
 /// Pixels' worth of rays a kernel of σ = `LEVEL_SIGMA_PX` · 2^k holds, over 4^k: 4π σ² / 4^k.
 const AREA_FACTOR: f64 = 4.0 * std::f64::consts::PI * LEVEL_SIGMA_PX * LEVEL_SIGMA_PX;
 
-/// A camera's accumulation grids.
+/// A camera's accumulation grids, on a side of the next power of two (so every level covers the
+/// grid exactly and keeps its total), read back on the image's `px` × `px`.
 #[derive(Debug, Clone)]
 pub struct Pyramid {
     px: usize,
+    /// Side of the grids: the next power of two ≥ px.
+    side: usize,
     /// Σ flux · angular kernel per base pixel.
     w: Vec<f64>,
     /// Σ angular weight (rays, counted by their angular kernel weight) per base pixel.
@@ -40,8 +44,8 @@ pub struct Estimate {
     pub undersampled: u64,
     /// Σ of the splatted weights (the camera's rays, by angular weight).
     pub total: f64,
-    /// (kernel σ in base pixels, weight) of every pixel holding splatted light: the widths the
-    /// light actually spreads with.
+    /// (kernel σ in base pixels, weight) of the light splatted, binned by eighths of a level: the
+    /// widths the light actually spreads with.
     pub mass_sigma: Vec<(f64, f64)>,
 }
 
@@ -128,22 +132,25 @@ impl Pyramid {
     /// Empty grids of `px` × `px` base pixels.
     pub fn new(px: u32) -> Self {
         let px = px.max(1) as usize;
+        let side = px.next_power_of_two();
         Self {
             px,
-            w: vec![0.0; px * px],
-            c: vec![0.0; px * px],
+            side,
+            w: vec![0.0; side * side],
+            c: vec![0.0; side * side],
         }
     }
 
     /// Adds a ray at image position `uv` (pixels, origin at the top-left corner, pixel centres at
     /// half integers) with weight `w` and count weight `c`, shared bilinearly among the four nearest
-    /// pixel centres. Positions outside the image are dropped.
-    pub fn splat(&mut self, uv: DVec2, w: f64, c: f64) {
+    /// pixel centres. Positions outside the image are dropped; returns whether it landed.
+    pub fn splat(&mut self, uv: DVec2, w: f64, c: f64) -> bool {
         let (fx, fy) = (uv.x - 0.5, uv.y - 0.5);
         let n = self.px as f64;
         if !(fx > -1.0 && fy > -1.0 && fx < n && fy < n) {
-            return;
+            return false;
         }
+        let stride = self.side;
         let (x0, y0) = (fx.floor(), fy.floor());
         let (tx, ty) = (fx - x0, fy - y0);
         for (dx, dy, k) in [
@@ -154,11 +161,12 @@ impl Pyramid {
         ] {
             let (x, y) = (x0 + dx, y0 + dy);
             if x >= 0.0 && y >= 0.0 && x < n && y < n {
-                let i = y as usize * self.px + x as usize;
+                let i = y as usize * stride + x as usize;
                 self.w[i] += w * k;
                 self.c[i] += c * k;
             }
         }
+        true
     }
 
     /// The per-pixel estimate. A pilot pass finds, at each pixel, the finest level whose
@@ -167,11 +175,11 @@ impl Pyramid {
     /// estimator: a bright spot keeps its narrow kernel while the sparse pixels around it spread
     /// only their own light, and the total is kept exactly).
     pub fn estimate(self, k_s: f64, fixed_level: Option<f64>) -> Estimate {
-        let px = self.px;
+        let (px, side) = (self.px, self.side);
         let total: f64 = self.c.iter().sum();
         let base_w = self.w.clone();
         let mut levels = vec![Level {
-            n: px,
+            n: side,
             w: self.w,
             c: self.c,
         }];
@@ -180,12 +188,12 @@ impl Pyramid {
             levels.push(next);
         }
         let top = levels.len() - 1;
-        let mut level = vec![0.0f32; px * px];
+        let mut level = vec![0.0f32; side * side];
         let mut undersampled = 0u64;
         if total <= 0.0 {
             return Estimate {
                 density: vec![0.0; px * px],
-                level,
+                level: vec![0.0; px * px],
                 undersampled,
                 total,
                 mass_sigma: Vec::new(),
@@ -193,7 +201,7 @@ impl Pyramid {
         }
         for by in 0..px {
             for bx in 0..px {
-                let i = by * px + bx;
+                let i = by * side + bx;
                 let count = |k: usize| levels[k].read(k as u32, bx, by).1 * AREA_FACTOR;
                 let l = match fixed_level {
                     Some(f) => f.clamp(0.0, top as f64),
@@ -228,27 +236,52 @@ impl Pyramid {
                 level[i] = l as f32;
             }
         }
-        let density = spread_by_level(px, &base_w, &level);
-        let mass_sigma = base_w
-            .iter()
-            .zip(&level)
-            .filter(|(w, _)| **w > 0.0)
-            .map(|(w, l)| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*l)), *w))
+        let spread = spread_by_level(side, &base_w, &level);
+        let mut mass_sigma = vec![0.0f64; MASS_BINS];
+        for (w, l) in base_w.iter().zip(&level) {
+            if *w > 0.0 {
+                mass_sigma[mass_bin(f64::from(*l))] += w;
+            }
+        }
+        let crop = |v: &[f64]| -> Vec<f64> {
+            (0..px)
+                .flat_map(|y| v[y * side..y * side + px].iter().copied())
+                .collect()
+        };
+        let density = crop(&spread);
+        let level = (0..px)
+            .flat_map(|y| level[y * side..y * side + px].iter().copied())
             .collect();
         Estimate {
             density,
             level,
             undersampled,
             total,
-            mass_sigma,
+            mass_sigma: mass_sigma
+                .iter()
+                .enumerate()
+                .filter(|(_, w)| **w > 0.0)
+                .map(|(b, w)| (LEVEL_SIGMA_PX * 2f64.powf(bin_level(b)), *w))
+                .collect(),
         }
     }
 }
 
-/// Spreads the values `w` of a `px` × `px` grid, each with the kernel of its own pixel's level
-/// (`level`, fractional levels split linearly between the two neighbours), and sums the results:
-/// the estimator's spatial operator, applied to any grid (the splatted rays, or a reference).
-/// The total is kept.
+/// Bins of the light's kernel levels for reports: eighths of a level from 0 to 16.
+const MASS_BINS: usize = 129;
+
+fn mass_bin(level: f64) -> usize {
+    ((level * 8.0).round().max(0.0) as usize).min(MASS_BINS - 1)
+}
+
+fn bin_level(b: usize) -> f64 {
+    b as f64 / 8.0
+}
+
+/// Spreads the values `w` of a `px` × `px` grid (`px` a power of two), each with the kernel of its
+/// own pixel's level (`level`, fractional levels split linearly between the two neighbours), and
+/// sums the results: the estimator's spatial operator, applied to any grid (the splatted rays, or
+/// a reference). The total is kept.
 pub fn spread_by_level(px: usize, w: &[f64], level: &[f32]) -> Vec<f64> {
     let top = levels_for(px);
     let mut parts: Vec<Vec<f64>> = vec![Vec::new(); top + 1];
@@ -343,6 +376,24 @@ mod tests {
             }
             let s = sum / count / f64::from(1u32 << k);
             assert!((s - LEVEL_SIGMA_PX).abs() < 0.15, "level {k}: σ / 2^k = {s}");
+        }
+    }
+
+    #[test]
+    fn a_side_that_is_not_a_power_of_two_keeps_the_light_and_its_place() {
+        // One ray at the centre of a 140 px image spread at every level: nothing lost (the image
+        // is wide enough) until the kernel reaches the border, and the centroid stays put.
+        for k in 0..=5 {
+            let mut p = Pyramid::new(140);
+            p.splat(DVec2::new(70.0, 70.0), 1.0, 1.0);
+            let e = p.estimate(1.0, Some(f64::from(k)));
+            let total: f64 = e.density.iter().sum();
+            assert!((total - 1.0).abs() < 0.02, "level {k}: {total}");
+            let cx: f64 = (0..140 * 140)
+                .map(|i| e.density[i] * ((i % 140) as f64 + 0.5))
+                .sum::<f64>()
+                / total;
+            assert!((cx - 70.0).abs() < 1.0, "level {k}: centroid x {cx}");
         }
     }
 

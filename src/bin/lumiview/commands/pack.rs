@@ -49,6 +49,14 @@ pub struct PackArgs {
     /// Capture sphere radius in metres for --synth (default 1.117).
     #[arg(long, value_name = "M")]
     pub radius: Option<f64>,
+    /// A proxy mesh (glTF 2.0, luminaire frame) to store in the pack (version 2), used by `render`
+    /// and `lumi_luminaire_load` unless they are given another; it replaces one the input has.
+    #[arg(long, value_name = "FILE.glb")]
+    pub proxy: Option<PathBuf>,
+    /// The --proxy mesh encloses the light instead of being its surface (as `rays2scan` writes a
+    /// ray file's `proxy.glb`): the renderer then samples the images plainly.
+    #[arg(long, requires = "proxy")]
+    pub proxy_bound: bool,
     /// Manifests: drop bad images (missing, unreadable, wrong size, bad pose) with a warning
     /// instead of failing.
     #[arg(long)]
@@ -110,8 +118,9 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
     ] {
         if given {
             return Err(format!(
-                "{name} applies to --synth; a ray file's estimate chooses its cameras from the data (set them with \
-                 `lumiview rays2scan`, then pack its manifest)"
+                "{name} applies to --synth (a .lvpack keeps its cameras; a ray file's estimate chooses them from the \
+                 data: set them with `lumiview rays2scan`, then `lumiview pack DIR/scan.json --proxy DIR/proxy.glb \
+                 --proxy-bound`)"
             )
             .into());
         }
@@ -126,7 +135,12 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
         return Ok((pack.into_scan(), desc, proxy));
     }
     // A TM-25 ray file: as `lumi_luminaire_load` and `render` read it.
-    Ok(scanfile::scan_from_file(file, ScanFileKind::RayFile)?)
+    let mut warnings = Vec::new();
+    let input = scanfile::scan_from_file_with_warnings(file, ScanFileKind::RayFile, &mut warnings)?;
+    for w in &warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    Ok(input)
 }
 
 fn stats_json(path: &Path, s: &PackStats, secs: f64) -> serde_json::Value {
@@ -158,6 +172,14 @@ pub fn pack(args: &PackArgs) -> CliResult {
     }
     let threshold = Threshold::parse(&args.threshold)?;
     let (scan, source, proxy) = input_scan(args)?;
+    let proxy = match &args.proxy {
+        Some(path) => Some(PackProxy {
+            triangles: lumiview::nearfield::proxy::load_gltf(path)?,
+            bound: args.proxy_bound,
+            source: format!("{}", path.display()),
+        }),
+        None => proxy,
+    };
     let opts = PackOptions {
         tile_size: args.tile,
         threshold,

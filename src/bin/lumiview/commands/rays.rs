@@ -519,6 +519,7 @@ fn rays2scan_histogram(args: &Rays2scanArgs) -> CliResult {
         (args.spatial_kernel.is_some(), "--spatial-kernel"),
         (args.cameras.is_some(), "--cameras"),
         (args.image_px.is_some(), "--image-px"),
+        (args.check, "--check"),
     ] {
         if given {
             return Err(format!("{name} applies to --method kde").into());
@@ -654,6 +655,8 @@ fn rays2scan_kde(args: &Rays2scanArgs) -> CliResult {
         if args.json {
             let mut v = serde_json::to_value(&r)?;
             v["file"] = json!(args.file.display().to_string());
+            v["manifest"] = json!(written.as_ref().map(|p| p.display().to_string()));
+            v["proxy"] = json!(written.as_ref().map(|_| dir.join("proxy.glb").display().to_string()));
             v["check"] = serde_json::to_value(&c)?;
             return print_report(&format!("{}\n", serde_json::to_string_pretty(&v)?));
         }

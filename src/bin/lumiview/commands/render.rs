@@ -14,7 +14,7 @@ use lumiview::gpu::{
     RenderOptions, RenderTarget, Renderer, TargetDesc,
 };
 use lumiview::nearfield::proxy::load_gltf;
-use lumiview::nearfield::scanfile::{detect, open_scan_of_kind};
+use lumiview::nearfield::scanfile::detect;
 use lumiview::nearfield::select::SelectionMode;
 use lumiview::photometry::web::direction;
 
@@ -255,7 +255,12 @@ pub fn render(a: &RenderArgs) -> CliResult {
     let mut r = Renderer::new(&ContextDesc::default())?;
     let loaded = match (kind, photometry) {
         (Some(kind), _) => {
-            let (pack, cached) = open_scan_of_kind(&a.file, kind, None)?;
+            let mut warnings = Vec::new();
+            let (pack, cached) =
+                lumiview::nearfield::scanfile::open_scan_of_kind_with_warnings(&a.file, kind, None, &mut warnings)?;
+            for w in &warnings {
+                eprintln!("lumiview: warning: {w}");
+            }
             let centre = pack.rayset().sphere.centre_m.as_vec3();
             let cameras = pack.image_count();
             // The user's mesh, else the pack's own (a ray file's grown hull bounds the light).
