@@ -250,3 +250,31 @@ fn the_demo_shows_its_build() {
         assert!(!line.contains("--quiet") && !line.contains("/dev/null"), "{line}");
     }
 }
+
+#[test]
+fn synth_forward_traces_a_ray_file_that_reads_back() {
+    let dir = std::env::temp_dir().join(format!("lumiview-synth-rays-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("disc.tm25ray");
+    let p = path.to_str().unwrap();
+    let out = lumiview(&["synth", "disc", "--rays", "2e3", "--seed", "4", "-o", p]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("2000 rays"));
+    let v = json(&["info", p, "--json"]);
+    let text = v.to_string();
+    assert!(text.contains("2000"), "{text}");
+    // A ray file needs an output, of the right kind; a count is a number.
+    for (args, want) in [
+        (vec!["synth", "disc", "--rays", "2e3"], "-o FILE.tm25ray"),
+        (vec!["synth", "disc", "--rays", "2e3", "-o", "x.png"], "x.png"),
+        (vec!["synth", "disc", "--rays", "many", "-o", p], "--rays 'many'"),
+    ] {
+        let out = lumiview(&args);
+        assert!(
+            !out.status.success() && stderr_of(&out).contains(want),
+            "{args:?}: {}",
+            stderr_of(&out)
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

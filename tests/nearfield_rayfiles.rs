@@ -15,7 +15,7 @@ use glam::DVec3;
 use lumiview::nearfield::binning::NearestDirection;
 use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackProxy};
 use lumiview::nearfield::proxy::triangles_of;
-use lumiview::nearfield::raykde::{estimate, KdeOptions, KdeScan};
+use lumiview::nearfield::raykde::{estimate, estimate_frozen, KdeOptions, KdeScan, RayBatch};
 use lumiview::nearfield::synth::emit::emit_rays;
 use lumiview::nearfield::synth::luminaire;
 use lumiview::nearfield::tm25::{encode, RayFile};
@@ -335,4 +335,44 @@ fn the_measured_led_far_field_matches_its_rays() {
     assert!(c.median_rel < 0.12, "bins: median {}", c.median_rel);
     assert!(c.ring_median_rel < 0.05, "rings: median {}", c.ring_median_rel);
     gpu_common::assert_no_validation_messages();
+}
+
+#[test]
+fn the_frozen_operator_on_the_estimates_own_rays_reproduces_it() {
+    // The kernel-matched truth is the estimate's operator applied to other rays: applied to the
+    // estimate's own rays (in two batches, each carrying half the flux twice over) it gives back
+    // the estimate's images.
+    let lum = luminaire("disc").unwrap();
+    let rays = emit_rays(lum.as_ref(), 20_000, 5, &|_| {}).unwrap();
+    let f = RayFile::from_bytes(&rays.to_tm25("lumiview test").unwrap(), "disc.tm25ray").unwrap();
+    let keep = KdeOptions {
+        keep_kernel_levels: true,
+        ..KdeOptions::default()
+    };
+    let e = estimate(&f, &keep, &|_, _| {}).unwrap();
+    // Without the kept levels the operator cannot be applied: an error, not level 0 everywhere.
+    let mut none = || -> Result<Option<RayBatch>, NearfieldError> { Ok(None) };
+    let err = estimate_frozen(&kde(&f), &mut none, &|_, _| {}).unwrap_err();
+    assert!(err.to_string().contains("keep_kernel_levels"), "{err}");
+    let batch: RayBatch = (0..rays.len())
+        .map(|i| (rays.origins[i], rays.directions[i], rays.flux_lm[i] / 2.0))
+        .collect();
+    let mut left = 2;
+    let mut next = || -> Result<Option<RayBatch>, NearfieldError> {
+        left -= 1;
+        Ok((left >= 0).then(|| batch.clone()))
+    };
+    let t = estimate_frozen(&e, &mut next, &|_, _| {}).unwrap();
+    let (mut worst, mut total) = (0.0f64, 0.0f64);
+    for i in 0..e.scan.set.cameras.len() {
+        let a = e.scan.source.image(i).unwrap();
+        let b = t.scan.source.image(i).unwrap();
+        for (x, y) in a.data.iter().zip(&b.data) {
+            worst = worst.max(f64::from((x - y).abs()));
+            total = total.max(f64::from(*x));
+        }
+    }
+    assert!(worst <= 1e-4 * total, "largest difference {worst} cd/m² of {total}");
+    // The file stores fluxes as f32.
+    assert!((t.report.flux_lm / e.report.flux_lm - 1.0).abs() < 1e-5);
 }

@@ -6,6 +6,7 @@
 //! as the table `lumiview eval` shows; [`write_triptych`] writes a view as render | reference | error.
 
 pub mod metrics;
+pub mod rayconv;
 pub mod rays;
 
 use std::path::{Path, PathBuf};
@@ -893,7 +894,13 @@ fn evaluate_loaded(
 
 /// The ray-caster's Σ T · p² over the pixels of [`ortho_intensity`]'s view (one ray through each pixel
 /// centre, as the GPU rasterises them).
-fn reference_ortho_intensity(lum: &dyn Luminaire, w: DVec3, centre: DVec3, rb: f64, px: u32) -> Result<f64, EvalError> {
+pub(crate) fn reference_ortho_intensity(
+    lum: &dyn Luminaire,
+    w: DVec3,
+    centre: DVec3,
+    rb: f64,
+    px: u32,
+) -> Result<f64, EvalError> {
     let size = px.max(8);
     let view = OrthoView {
         direction: w,
@@ -909,7 +916,7 @@ fn reference_ortho_intensity(lum: &dyn Luminaire, w: DVec3, centre: DVec3, rb: f
 
 /// Î(ω) = Σ L · p² over an orthographic render along −ω framing a sphere of radius `rb` with `px`
 /// pixels a side (1 pixel of margin each side).
-fn ortho_intensity(
+pub(crate) fn ortho_intensity(
     r: &mut Renderer,
     targets: &mut Vec<RenderTarget>,
     w: DVec3,

@@ -115,6 +115,10 @@ enum Command {
     /// each selection mode, compared with the exact ray-caster (docs/quality-metrics.md); prints the
     /// table and writes the worst views as images.
     Eval(commands::EvalArgs),
+    /// Ray-file convergence harness: rays forward-traced from synthetic luminaires at several
+    /// counts, estimated, rendered on the GPU and compared with the kernel-matched truth and the
+    /// exact ray-caster (docs/quality-metrics.md, "Ray files"); prints the table and the verdicts.
+    EvalRays(commands::EvalRaysArgs),
 }
 
 /// Mesa's device-select Vulkan layer probes Wayland while the GPUs are listed and prints "error:
@@ -158,6 +162,7 @@ fn main() -> ExitCode {
         Command::Synth(args) => commands::synth(&args),
         Command::Pack(args) => commands::pack(&args),
         Command::Eval(args) => commands::eval(&args),
+        Command::EvalRays(args) => commands::eval_rays(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -89,8 +89,10 @@ pub struct Bandwidths {
     cell_h: Vec<f64>,
     /// The intensity half-width of the rays in each fine cell (rad), holding k_I rays.
     cell_hi: Vec<f64>,
-    /// Narrowest and widest intensity widths allowed (rad).
+    /// Widest intensity width allowed (rad).
     hi_max: f64,
+    /// A fixed intensity width (rad), where the user gave one.
+    fixed_hi: Option<f64>,
     /// Effective rays, (Σ Φ)² / Σ Φ².
     n_eff: f64,
     /// Mean flux per effective ray (lm).
@@ -199,6 +201,7 @@ impl Bandwidths {
             cell_h: Vec::new(),
             cell_hi: Vec::new(),
             hi_max: PI / 2.0,
+            fixed_hi: opts.angular_kernel_deg.map(f64::to_radians),
             n_eff,
             flux_per_ray,
             source_radius: source.radius,
@@ -415,6 +418,43 @@ impl Bandwidths {
                 let (h, hi) = (self.cell_h[j], self.cell_hi[j]);
                 cells.items[s..e].iter().map(move |&r| (r, h, hi))
             })
+    }
+
+    /// Gives every fine cell that other rays (`get`, `n` of them) fall in, and that holds none of
+    /// this estimate's rays, the widths this estimate would have given a ray there (the
+    /// k-nearest-neighbour angles of its own histogram, clamped as for its own rays), so that the
+    /// same operator applies to those rays ([`super::estimate_frozen`]). The histogram itself is
+    /// not changed.
+    pub fn cover(&mut self, get: RayGet<'_>, n: usize) {
+        let m = self.fine_dirs.len();
+        let mut touched = vec![false; m];
+        for i in 0..n {
+            if let Some(j) = get(i).and_then(|(_, k, _)| self.fine.nearest(k)) {
+                touched[j] = true;
+            }
+        }
+        let new: Vec<usize> = (0..m).filter(|&j| touched[j] && self.cell_h[j] <= 0.0).collect();
+        let widths: Vec<(usize, f64, f64)> = new
+            .par_iter()
+            .map(|&j| {
+                let d = self.fine_dirs[j];
+                let hs = self
+                    .knn_angle(d, self.rays_per_angular_kernel)
+                    .0
+                    .clamp(self.h_min, self.h_max);
+                let hi = self.fixed_hi.unwrap_or_else(|| {
+                    self.knn_angle(d, self.rays_per_intensity_kernel)
+                        .0
+                        .clamp(self.h_min, self.hi_max)
+                });
+                (j, hs.max(hi), hi)
+            })
+            .collect();
+        for (j, hs, hi) in widths {
+            self.cell_h[j] = hs;
+            self.cell_hi[j] = hi;
+            self.lit.push(j);
+        }
     }
 
     /// Effective rays (Σ Φ)² / Σ Φ².

@@ -35,7 +35,7 @@ pub mod pyramid;
 use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
-use self::bandwidth::{angular_kernel, Bandwidths, RaySummary};
+use self::bandwidth::{angular_kernel, Bandwidths, RayGet, RaySummary};
 use self::pyramid::{Pyramid, LEVEL_SIGMA_PX};
 use super::binning::NearestDirection;
 use super::error::{NearfieldError, Result};
@@ -83,6 +83,9 @@ pub struct KdeOptions {
     pub radius_m: Option<f64>,
     /// Scale the rays' luminous fluxes to sum to the header's luminous flux.
     pub scale_to_header_flux: bool,
+    /// Keep the spatial kernel level of every pixel ([`KernelMaps::level`], as much memory as the
+    /// images), which [`estimate_frozen`] needs; otherwise they are dropped camera by camera.
+    pub keep_kernel_levels: bool,
 }
 
 /// Three quantiles of a reported width.
@@ -149,11 +152,26 @@ pub struct KernelMaps {
     pub angular_rad: Vec<f64>,
     /// Weighted footprint half-width of the rays each camera's image was shaped from (radians).
     pub footprint_rad: Vec<f64>,
-    /// Spatial σ per camera and pixel (metres), row-major like the images.
-    pub spatial_m: Vec<Vec<f32>>,
+    /// Spatial kernel level per camera and pixel, row-major like the images: σ =
+    /// [`LEVEL_SIGMA_PX`] · 2^level pixels ([`KernelMaps::spatial_m`]). Empty unless
+    /// [`KdeOptions::keep_kernel_levels`] was set.
+    pub level: Vec<Vec<f32>>,
+    /// Pixel size on the object plane (m).
+    pub pixel_m: f64,
 }
 
-/// One camera's image, its kernel σ per pixel, its under-sampled pixels, the weighted intensity
+impl KernelMaps {
+    /// Spatial σ of camera `i`'s pixels (metres), row-major like the images; empty for no camera.
+    pub fn spatial_m(&self, i: usize) -> Vec<f32> {
+        self.level.get(i).map_or_else(Vec::new, |l| {
+            l.iter()
+                .map(|v| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*v)) * self.pixel_m) as f32)
+                .collect()
+        })
+    }
+}
+
+/// One camera's image, its kernel level per pixel, its under-sampled pixels, the weighted intensity
 /// and footprint widths of the rays it gathered (rad), and (σ in px, weight) of its lit pixels.
 type CameraEstimate = (LuminanceImage, Vec<f32>, u64, (f64, f64), Vec<(f64, f64)>);
 
@@ -161,32 +179,88 @@ type CameraEstimate = (LuminanceImage, Vec<f32>, u64, (f64, f64), Vec<(f64, f64)
 struct Gather<'a> {
     bw: &'a Bandwidths,
     cells: &'a bandwidth::CellRays,
-    rays: &'a Rays<'a>,
-    k_s: f64,
+    rays: RayGet<'a>,
     /// Capture radius (m): the depth at which a pixel's footprint is `A_px`.
     radius_m: f64,
 }
 
+/// What one camera has gathered: the splatted image and the sums of its angular kernels.
+struct CameraAcc {
+    pyr: Pyramid,
+    /// Σ flux × intensity kernel (lm/sr).
+    intensity: f64,
+    /// Σ weight × intensity width, Σ weight (for the camera's mean intensity width).
+    ih: f64,
+    iw: f64,
+    /// The same for the footprint widths.
+    fh: f64,
+    fw: f64,
+    /// Σ footprint weight of the rays that landed in the image.
+    w_in: f64,
+}
+
+/// How a camera's spatial kernels are chosen.
+enum Levels<'a> {
+    /// From its own rays: k_s per kernel, or one fixed level.
+    Choose { k_s: f64, fixed: Option<f64> },
+    /// Given per pixel (another estimate's).
+    Given(&'a [f32]),
+}
+
+impl CameraAcc {
+    fn new(px: u32) -> Self {
+        Self {
+            pyr: Pyramid::new(px),
+            intensity: 0.0,
+            ih: 0.0,
+            iw: 0.0,
+            fh: 0.0,
+            fw: 0.0,
+            w_in: 0.0,
+        }
+    }
+
+    /// The image as Σ flux × angular kernel per pixel (lm/sr; divide by the pixel's footprint for
+    /// cd/m²) and the kernel level per pixel.
+    fn finish(self, levels: Levels<'_>) -> CameraEstimate {
+        let px = self.pyr.side_px();
+        let est = match levels {
+            Levels::Choose { k_s, fixed } => self.pyr.estimate(k_s, fixed),
+            Levels::Given(l) => self.pyr.estimate_at(l),
+        };
+        // Normalised so that Σ L · A_px(z) over the image is the intensity.
+        let scale = if self.w_in > 0.0 {
+            self.intensity / self.w_in
+        } else {
+            0.0
+        };
+        let image = LuminanceImage {
+            width: px,
+            height: px,
+            data: est.density.iter().map(|w| (*w * scale) as f32).collect(),
+        };
+        let h_cam = if self.iw > 0.0 { self.ih / self.iw } else { 0.0 };
+        let f_cam = if self.fw > 0.0 { self.fh / self.fw } else { 0.0 };
+        let mass = est.mass_sigma.into_iter().map(|(s, w)| (s, w * scale)).collect();
+        (image, est.level, est.undersampled, (h_cam, f_cam), mass)
+    }
+}
+
 impl Gather<'_> {
-    /// The estimate of one camera (direction `dir` from the sphere's centre) with intrinsics `k`:
-    /// the image as Σ flux × angular kernel per pixel (lm/sr; divide by the pixel's footprint for
-    /// cd/m²) and the kernel σ per pixel in pixels.
-    fn camera(&self, cam: &Camera, dir: DVec3, k: &Intrinsics, fixed_level: Option<f64>) -> CameraEstimate {
-        let px = k.width;
-        let mut pyr = Pyramid::new(px);
+    /// Adds the rays reaching one camera (direction `dir` from the sphere's centre, intrinsics
+    /// `k`) to what it has gathered.
+    fn gather(&self, acc: &mut CameraAcc, cam: &Camera, dir: DVec3, k: &Intrinsics) {
         // The intensity (lm/sr) from the intensity kernels; the footprint from the wider pool.
-        let (mut intensity, mut ih, mut iw) = (0.0, 0.0, 0.0);
-        let (mut fh, mut fw, mut w_in) = (0.0, 0.0, 0.0);
         for (r, h, hi) in self.bw.rays_reaching(self.cells, dir) {
-            let Some((x, kd, f)) = self.rays.get(r as usize) else {
+            let Some((x, kd, f)) = (self.rays)(r as usize) else {
                 continue;
             };
             let theta = kd.dot(dir).clamp(-1.0, 1.0).acos();
             if theta < hi {
                 let w = f * (1.0 - (theta / hi).powi(2)) * angular_kernel(hi);
-                intensity += w;
-                ih += w * hi;
-                iw += w;
+                acc.intensity += w;
+                acc.ih += w * hi;
+                acc.iw += w;
             }
             if theta >= h {
                 continue;
@@ -200,30 +274,30 @@ impl Gather<'_> {
             // A pixel's footprint at the ray's depth z is A_px · (z / r_s)²: the light spreads over
             // that, so it counts (r_s / z)² towards the luminance.
             let depth = (self.radius_m / xc.z.max(1e-9)).powi(2);
-            if pyr.splat(uv, w * depth, a) {
-                w_in += w;
+            if acc.pyr.splat(uv, w * depth, a) {
+                acc.w_in += w;
             }
-            fh += w * h;
-            fw += w;
+            acc.fh += w * h;
+            acc.fw += w;
         }
-        let est = pyr.estimate(self.k_s, fixed_level);
-        // Normalised so that Σ L · A_px(z) over the image is the intensity.
-        let scale = if w_in > 0.0 { intensity / w_in } else { 0.0 };
-        let image = LuminanceImage {
-            width: px,
-            height: px,
-            data: est.density.iter().map(|w| (*w * scale) as f32).collect(),
-        };
-        let sigma: Vec<f32> = est
-            .level
-            .iter()
-            .map(|l| (LEVEL_SIGMA_PX * 2f64.powf(f64::from(*l))) as f32)
-            .collect();
-        let h_cam = if iw > 0.0 { ih / iw } else { 0.0 };
-        let f_cam = if fw > 0.0 { fh / fw } else { 0.0 };
-        let mass = est.mass_sigma.into_iter().map(|(s, w)| (s, w * scale)).collect();
-        (image, sigma, est.undersampled, (h_cam, f_cam), mass)
     }
+
+    /// The estimate of one camera with its own kernels.
+    fn camera(&self, cam: &Camera, dir: DVec3, k: &Intrinsics, k_s: f64, fixed: Option<f64>) -> CameraEstimate {
+        let mut acc = CameraAcc::new(k.width);
+        self.gather(&mut acc, cam, dir, k);
+        acc.finish(Levels::Choose { k_s, fixed })
+    }
+}
+
+/// The kernels an estimate chose, kept so that the same operator can be applied to other rays
+/// ([`estimate_frozen`]): the angular widths as a function of a ray's direction, the cameras'
+/// directions and the capture radius (the spatial levels per pixel are in [`KernelMaps`]).
+#[derive(Debug, Clone)]
+pub struct FrozenKernels {
+    bw: Bandwidths,
+    directions: Vec<DVec3>,
+    radius_m: f64,
 }
 
 /// A ray set turned into a virtual scan.
@@ -237,6 +311,8 @@ pub struct KdeScan {
     pub proxy: ProxyMesh,
     /// The kernel widths.
     pub kernels: KernelMaps,
+    /// The kernels, for applying the same estimate to other rays.
+    pub frozen: FrozenKernels,
 }
 
 /// The rays of a file as plain numbers (metres, unit directions, lm), in file order.
@@ -450,8 +526,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     let gather = Gather {
         bw: &bw,
         cells: &cells,
-        rays: &rays,
-        k_s,
+        rays: &get,
         radius_m: layout.radius_m,
     };
     // Image size: given, or from a pilot at 256 px of the brightest directions, so that the finer
@@ -464,7 +539,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
             let pixel = layout.radius_m / k.focal_px.x;
             let mut samples = Vec::new();
             for i in bw.brightest_cameras(&dirs, 8) {
-                let est = gather.camera(&cameras[i], dirs[i], &k, None);
+                let est = gather.camera(&cameras[i], dirs[i], &k, k_s, None);
                 samples.extend(est.4.into_iter().map(|(s, w)| (s * pixel, w)));
             }
             let sigma = spread(samples).p10.max(pixel);
@@ -494,7 +569,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         .par_iter()
         .enumerate()
         .map(|(i, cam)| {
-            let est = gather.camera(cam, dirs[i], &intrinsics, fixed_level);
+            let est = gather.camera(cam, dirs[i], &intrinsics, k_s, fixed_level);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if n % 16 == 0 {
                 progress("estimating", 0.2 + 0.7 * n as f64 / m as f64);
@@ -521,18 +596,17 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         ));
     }
     let mut images = Vec::with_capacity(m);
-    let mut sigmas = Vec::with_capacity(m);
+    let mut levels = Vec::with_capacity(m);
     let mut h_a = Vec::with_capacity(m);
     let mut h_f = Vec::with_capacity(m);
     let mut undersampled = 0u64;
     let mut lit = 0usize;
     let mut spatial_samples = Vec::new();
-    for (img, sigma, under, h_cam, mass_sigma) in per_camera {
+    for (img, level, under, h_cam, mass_sigma) in per_camera {
         let mut img = img;
         for v in &mut img.data {
             *v = (f64::from(*v) / pixel_area) as f32;
         }
-        let sigma: Vec<f32> = sigma.iter().map(|s| (f64::from(*s) * pixel_m) as f32).collect();
         if img.data.iter().any(|v| *v > 0.0) {
             lit += 1;
         }
@@ -541,7 +615,9 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         h_a.push(h_cam.0);
         h_f.push(h_cam.1);
         images.push(img);
-        sigmas.push(sigma);
+        if opts.keep_kernel_levels {
+            levels.push(level);
+        }
     }
     let widths = bw.widths();
     let angular_spread = spread(widths.iter().map(|(_, h, w)| (h.to_degrees(), *w)).collect());
@@ -595,7 +671,110 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         kernels: KernelMaps {
             angular_rad: h_a,
             footprint_rad: h_f,
-            spatial_m: sigmas,
+            level: levels,
+            pixel_m,
+        },
+        frozen: FrozenKernels {
+            bw,
+            directions: dirs,
+            radius_m: layout.radius_m,
+        },
+    })
+}
+
+/// Rays handed to [`estimate_frozen`] in batches: origin (m), unit direction, luminous flux (lm).
+pub type RayBatch = Vec<(DVec3, DVec3, f64)>;
+
+/// The operator `base` applied to other rays: the same cameras and images, each ray weighted with
+/// the angular widths `base` gives its direction (its own histogram's k-nearest-neighbour angles,
+/// also where `base` had no ray), and each pixel spread with the spatial level `base` chose for
+/// it. Applied to many more rays of the same light field this is `base`'s expectation, the
+/// **kernel-matched truth** of docs/quality-metrics.md ("Ray files"). `next` yields the rays
+/// (their fluxes summing to the flux the estimate is to hold) until it returns `None`.
+///
+/// # Errors
+/// What `next` returns; [`NearfieldError::InvalidArgument`] when no ray carries flux.
+pub fn estimate_frozen(
+    base: &KdeScan,
+    next: &mut dyn FnMut() -> Result<Option<RayBatch>>,
+    progress: &(dyn Fn(&str, f64) + Sync),
+) -> Result<KdeScan> {
+    let set = &base.scan.set;
+    let k = set.intrinsics;
+    let px = (k.width as usize) * (k.height as usize);
+    if base.kernels.level.len() != set.cameras.len() || base.kernels.level.iter().any(|l| l.len() != px) {
+        return Err(NearfieldError::invalid(
+            "estimate",
+            "its spatial kernel levels were not kept (estimate with KdeOptions::keep_kernel_levels)",
+        ));
+    }
+    let mut bw = base.frozen.bw.clone();
+    let dirs = &base.frozen.directions;
+    let mut accs: Vec<CameraAcc> = set.cameras.iter().map(|_| CameraAcc::new(k.width)).collect();
+    let (mut rays_seen, mut flux, mut flux2) = (0u64, 0.0f64, 0.0f64);
+    while let Some(batch) = next()? {
+        let usable = |r: &(DVec3, DVec3, f64)| r.2 > 0.0 && r.2.is_finite() && r.0.is_finite() && r.1.is_finite();
+        let get = |i: usize| batch.get(i).copied().filter(usable);
+        bw.cover(&get, batch.len());
+        let cells = bw.cell_rays(&get, batch.len());
+        let gather = Gather {
+            bw: &bw,
+            cells: &cells,
+            rays: &get,
+            radius_m: base.frozen.radius_m,
+        };
+        accs.par_iter_mut()
+            .zip(set.cameras.par_iter())
+            .zip(dirs.par_iter())
+            .for_each(|((acc, cam), d)| gather.gather(acc, cam, *d, &k));
+        for r in batch.iter().filter(|r| usable(r)) {
+            flux += r.2;
+            flux2 += r.2 * r.2;
+        }
+        rays_seen += batch.len() as u64;
+        progress("kernel-matched rays", rays_seen as f64);
+    }
+    if flux <= 0.0 {
+        return Err(NearfieldError::invalid("rays", "no ray with a positive luminous flux"));
+    }
+    let pixel_area = base.kernels.pixel_m * base.kernels.pixel_m;
+    let images: Vec<LuminanceImage> = accs
+        .into_par_iter()
+        .enumerate()
+        .map(|(i, acc)| {
+            let level = base.kernels.level[i].as_slice();
+            let mut img = acc.finish(Levels::Given(level)).0;
+            for v in &mut img.data {
+                *v = (f64::from(*v) / pixel_area) as f32;
+            }
+            img
+        })
+        .collect();
+    let (omega, _) = NearestDirection::new(dirs).solid_angles();
+    let flux_images: f64 = images
+        .iter()
+        .zip(&omega)
+        .map(|(img, o)| img.data.iter().map(|v| f64::from(*v)).sum::<f64>() * pixel_area * o)
+        .sum();
+    let mut report = base.report.clone();
+    report.rays = rays_seen;
+    report.effective_rays = flux * flux / flux2;
+    report.flux_lm = flux;
+    report.flux_from_images_lm = flux_images;
+    report.cameras_lit = images.iter().filter(|i| i.data.iter().any(|v| *v > 0.0)).count();
+    report.undersampled_pixels = 0;
+    report.warnings = Vec::new();
+    Ok(KdeScan {
+        scan: Scan {
+            set: set.clone(),
+            source: Box::new(MemorySource { images }),
+        },
+        report,
+        proxy: base.proxy.clone(),
+        kernels: base.kernels.clone(),
+        frozen: FrozenKernels {
+            bw,
+            ..base.frozen.clone()
         },
     })
 }

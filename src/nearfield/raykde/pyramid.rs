@@ -141,6 +141,11 @@ impl Pyramid {
         }
     }
 
+    /// The image side (px).
+    pub fn side_px(&self) -> u32 {
+        self.px as u32
+    }
+
     /// Adds a ray at image position `uv` (pixels, origin at the top-left corner, pixel centres at
     /// half integers) with weight `w` and count weight `c`, shared bilinearly among the four nearest
     /// pixel centres. Positions outside the image are dropped; returns whether it landed.
@@ -236,34 +241,55 @@ impl Pyramid {
                 level[i] = l as f32;
             }
         }
-        let spread = spread_by_level(side, &base_w, &level);
-        let mut mass_sigma = vec![0.0f64; MASS_BINS];
-        for (w, l) in base_w.iter().zip(&level) {
-            if *w > 0.0 {
-                mass_sigma[mass_bin(f64::from(*l))] += w;
+        finish(px, side, base_w, level, undersampled, total)
+    }
+
+    /// The per-pixel estimate with the kernel levels given (`level`: `px` × `px`, row-major), as
+    /// another estimate chose them: the same operator applied to other rays (a kernel-matched
+    /// reference). A `level` of the wrong length is read as far as it goes, the rest at level 0.
+    pub fn estimate_at(self, level: &[f32]) -> Estimate {
+        let (px, side) = (self.px, self.side);
+        let total: f64 = self.c.iter().sum();
+        let mut side_level = vec![0.0f32; side * side];
+        for y in 0..px {
+            for x in 0..px {
+                side_level[y * side + x] = level.get(y * px + x).copied().unwrap_or(0.0);
             }
         }
-        let crop = |v: &[f64]| -> Vec<f64> {
-            (0..px)
-                .flat_map(|y| v[y * side..y * side + px].iter().copied())
-                .collect()
-        };
-        let density = crop(&spread);
-        let level = (0..px)
-            .flat_map(|y| level[y * side..y * side + px].iter().copied())
-            .collect();
-        Estimate {
-            density,
-            level,
-            undersampled,
-            total,
-            mass_sigma: mass_sigma
-                .iter()
-                .enumerate()
-                .filter(|(_, w)| **w > 0.0)
-                .map(|(b, w)| (LEVEL_SIGMA_PX * 2f64.powf(bin_level(b)), *w))
-                .collect(),
+        finish(px, side, self.w, side_level, 0, total)
+    }
+}
+
+/// Spreads the splatted light `base_w` (`side` × `side`) with the per-pixel levels and crops to
+/// `px` × `px`.
+fn finish(px: usize, side: usize, base_w: Vec<f64>, level: Vec<f32>, undersampled: u64, total: f64) -> Estimate {
+    let spread = spread_by_level(side, &base_w, &level);
+    let mut mass_sigma = vec![0.0f64; MASS_BINS];
+    for (w, l) in base_w.iter().zip(&level) {
+        if *w > 0.0 {
+            mass_sigma[mass_bin(f64::from(*l))] += w;
         }
+    }
+    let crop = |v: &[f64]| -> Vec<f64> {
+        (0..px)
+            .flat_map(|y| v[y * side..y * side + px].iter().copied())
+            .collect()
+    };
+    let density = crop(&spread);
+    let level = (0..px)
+        .flat_map(|y| level[y * side..y * side + px].iter().copied())
+        .collect();
+    Estimate {
+        density,
+        level,
+        undersampled,
+        total,
+        mass_sigma: mass_sigma
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w > 0.0)
+            .map(|(b, w)| (LEVEL_SIGMA_PX * 2f64.powf(bin_level(b)), *w))
+            .collect(),
     }
 }
 

@@ -159,24 +159,32 @@ impl Patch {
 struct Rng(u64);
 
 impl Rng {
+    /// A generator for one (seed, stream) pair. Both are hashed into the state: SplitMix64's
+    /// states advance by a fixed odd constant, so states that differ by a multiple of it (as
+    /// `seed ^ stream · constant` did for small seeds) walk the same sequence shifted, and whole
+    /// chunks of rays came out as copies of each other.
     fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Rng(seed ^ stream.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        r.next();
-        r
+        Rng(mix(
+            mix(seed).wrapping_add(0x632B_E59B_D9B4_E019) ^ mix(stream.wrapping_add(0xD1B5_4A32_D192_ED03))
+        ))
     }
 
     fn next(&mut self) -> u64 {
         self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        mix(self.0)
     }
 
     /// Uniform in [0, 1).
     fn uniform(&mut self) -> f64 {
         (self.next() >> 11) as f64 / (1u64 << 53) as f64
     }
+}
+
+/// SplitMix64's finaliser: a bijective 64-bit hash.
+fn mix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
 }
 
 /// A cosine-weighted direction about `n`, on its front side or (half the time) its back side.
@@ -384,6 +392,26 @@ mod tests {
             let got = f64::from(c[k]) / 80_000.0;
             assert!((got - want).abs() < 0.01, "{k}: {got} vs {want}");
         }
+    }
+
+    #[test]
+    fn every_ray_is_drawn_afresh() {
+        // Rays from many chunks (streams) and two seeds: no ray repeats (streams of one
+        // generator walking the same sequence shifted once made 5 of 6 rays copies).
+        let lum = luminaire("disc").unwrap();
+        let mut keys = Vec::new();
+        for seed in [0, 1] {
+            let r = emit_rays(lum.as_ref(), 200_000, seed, &|_| {}).unwrap();
+            keys.extend(
+                r.directions
+                    .iter()
+                    .map(|d| (d.x.to_bits(), d.y.to_bits(), d.z.to_bits())),
+            );
+        }
+        let n = keys.len();
+        keys.sort_unstable();
+        keys.dedup();
+        assert_eq!(keys.len(), n, "{} repeated rays of {n}", n - keys.len());
     }
 
     #[test]

@@ -129,3 +129,118 @@ pub fn eval(a: &EvalArgs) -> CliResult {
     }
     Ok(())
 }
+
+/// Arguments of `lumiview eval-rays`.
+#[derive(Args, Debug)]
+pub struct EvalRaysArgs {
+    /// Synthetic luminaires (repeat or comma-separate).
+    #[arg(
+        long = "luminaire",
+        value_delimiter = ',',
+        value_name = "NAME",
+        default_value = "disc,led-dots,cos10,two-planes"
+    )]
+    pub luminaires: Vec<String>,
+    /// Ray counts N (comma-separated; 1e5 and 100000 both work), each ≤ 5e7.
+    #[arg(long, value_delimiter = ',', default_value = "1e4,1e5,1e6,1e7")]
+    pub rays: Vec<String>,
+    /// Rays of the kernel-matched truth per estimated ray.
+    #[arg(long, default_value_t = 20.0)]
+    pub truth_factor: f64,
+    /// Most rays of a kernel-matched truth (forward-traced in batches of 4 million).
+    #[arg(long, default_value = "2e7")]
+    pub truth_max: String,
+    /// Side of the orthographic views for the flux, in pixels.
+    #[arg(long, default_value_t = 128)]
+    pub ortho_px: u32,
+    /// Where the packs are written (overwritten).
+    #[arg(long, default_value = "target/eval-rays")]
+    pub work_dir: PathBuf,
+    /// Write each row's first outside view here as PNGs (estimate | truth | relative error, ±10 %
+    /// full scale), against each truth.
+    #[arg(long, value_name = "DIR")]
+    pub images: Option<PathBuf>,
+    /// Also write the table here.
+    #[arg(short = 'o', long = "output", value_name = "FILE")]
+    pub output: Option<PathBuf>,
+}
+
+pub(crate) fn parse_count(what: &str, s: &str) -> Result<u64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{what} '{s}': expected a number of rays such as 1e6"))?;
+    if !(v.is_finite() && v >= 100.0 && v <= lumiview::nearfield::synth::emit::MAX_RAYS as f64) {
+        return Err(format!(
+            "{what} '{s}': expected 100…{}",
+            lumiview::nearfield::synth::emit::MAX_RAYS
+        ));
+    }
+    Ok(v.round() as u64)
+}
+
+/// Runs `lumiview eval-rays`: the ray-file convergence table of docs/quality-metrics.md ("Ray
+/// files").
+pub fn eval_rays(a: &EvalRaysArgs) -> CliResult {
+    use lumiview::eval::rayconv::{format_table, run, RayConvConfig};
+    for n in &a.luminaires {
+        if !NAMES.contains(&n.as_str()) {
+            return Err(format!("--luminaire: unknown name '{n}'; expected one of: {}", NAMES.join(", ")).into());
+        }
+    }
+    let rays = a
+        .rays
+        .iter()
+        .map(|s| parse_count("--rays", s))
+        .collect::<Result<Vec<_>, _>>()?;
+    if !(a.truth_factor.is_finite() && (1.0..=1000.0).contains(&a.truth_factor)) {
+        return Err(format!("--truth-factor {}: expected 1…1000", a.truth_factor).into());
+    }
+    let truth_max = parse_count("--truth-max", &a.truth_max)?;
+    if !(64..=4096).contains(&a.ortho_px) {
+        return Err(format!("--ortho-px {}: expected 64…4096", a.ortho_px).into());
+    }
+    let cfg = RayConvConfig {
+        rays,
+        truth_factor: a.truth_factor,
+        truth_max_rays: truth_max,
+        ortho_px: a.ortho_px,
+        work_dir: a.work_dir.clone(),
+        images_dir: a.images.clone(),
+        ..RayConvConfig::default()
+    };
+    let mut r = Renderer::new(&ContextDesc::default())?;
+    eprintln!("lumiview eval-rays on {}", r.ctx.caps.adapter_name);
+    let start = std::time::Instant::now();
+    let progress = |m: &str| eprintln!("  [{:>6.0} s] {m}", start.elapsed().as_secs_f64());
+    let mut rows = Vec::new();
+    let mut failed = Vec::new();
+    for n in &a.luminaires {
+        let mut done = Vec::new();
+        let result = run(&mut r, n, &cfg, &progress, &mut |row| {
+            // Print as we go: a full run takes a while.
+            eprint!("{}", format_table(std::slice::from_ref(row)));
+            done.push(row.clone());
+        });
+        // A luminaire that fails (e.g. too few effective rays) is named; the others still run.
+        if let Err(e) = result {
+            eprintln!("lumiview: error: {n}: {e}");
+            failed.push(format!("FAIL {n}: {e}"));
+        }
+        rows.extend(done);
+    }
+    let mut table = format_table(&rows);
+    for f in &failed {
+        table.push_str(f);
+        table.push('\n');
+    }
+    print!("{table}");
+    if let Some(o) = &a.output {
+        std::fs::write(o, &table).map_err(|e| format!("{}: {e}", o.display()))?;
+    }
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!("{} of {} luminaires failed", failed.len(), a.luminaires.len()).into())
+    }
+}

@@ -40,7 +40,7 @@ use serde_json::json;
 
 pub use cameras::{cameras, CamerasArgs};
 pub use convert::{convert, ConvertArgs};
-pub use eval::{eval, EvalArgs};
+pub use eval::{eval, eval_rays, EvalArgs, EvalRaysArgs};
 pub use info::info;
 pub use isolux::{isolux, IsoluxArgs};
 pub use lut::{lut, LutArgs};

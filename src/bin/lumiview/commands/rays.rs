@@ -620,6 +620,7 @@ fn rays2scan_kde(args: &Rays2scanArgs) -> CliResult {
         image_px: args.image_px,
         radius_m: args.radius,
         scale_to_header_flux: args.scale_to_header_flux,
+        keep_kernel_levels: false,
     };
     let file = RayFile::read(&args.file)?;
     let bar = indicatif::ProgressBar::new(1000);
