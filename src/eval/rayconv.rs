@@ -17,17 +17,16 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
 
-use glam::{DVec3, Mat4};
+use glam::DVec3;
 
 use super::metrics::{aggregate, compare_view_with_margin, SetMetrics, ViewMetrics};
+use super::rays::{add_bound_estimate, proxy_reach};
 use super::{fibonacci, framed_view, ortho_intensity, reference_ortho_intensity, render_view, write_triptych};
 use super::{EvalError, View};
-use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
 use crate::gpu::{RenderTarget, Renderer};
-use crate::nearfield::pack::{write_pack, Pack, PackOptions, PackProxy};
+use crate::nearfield::pack::{PackOptions, PackProxy};
 use crate::nearfield::proxy::triangles_of;
 use crate::nearfield::raykde::{self, KdeOptions, KdeScan, RayBatch};
-use crate::nearfield::select::SelectionMode;
 use crate::nearfield::synth::emit::emit_rays;
 use crate::nearfield::synth::{self, render_pinhole, Luminaire};
 use crate::nearfield::tm25::RayFile;
@@ -218,27 +217,12 @@ fn render_estimate(
         source: "the hull of the ray origins, grown by two spatial kernels".into(),
     };
     let opts = PackOptions {
-        proxy: Some(proxy.clone()),
+        proxy: Some(proxy),
         source: "lumiview eval-rays".into(),
         ..PackOptions::default()
     };
-    write_pack(&e.scan, path, &opts, &|_, _| {})?;
-    let pack = Pack::open(path)?;
-    let nf = NearfieldOptions {
-        budget_bytes: 4 << 30,
-        proxy_is_bound: true,
-        ..NearfieldOptions::default()
-    };
-    let id = r.add_pack(Arc::new(pack), Some(proxy.triangles.clone()), &nf)?;
+    let id = add_bound_estimate(r, e, path, &opts, 4 << 30)?;
     let result = (|| {
-        let inst = r.add_instance(id, Mat4::IDENTITY)?;
-        r.set_nearfield_settings(
-            inst,
-            NearfieldSettings {
-                mode: SelectionMode::Continuous,
-                proxy: true,
-            },
-        )?;
         let mut targets: Vec<RenderTarget> = Vec::new();
         let mut set = |views: &[View]| -> Result<Vec<Vec<f32>>, EvalError> {
             views
@@ -250,12 +234,7 @@ fn render_estimate(
         let inside = set(&v.inside)?;
         // The estimate's light reaches past the luminaire's bounds by its kernels, as far as the
         // proxy (the origins' hull grown by two spatial kernels): the frame holds all of it.
-        let reach = proxy
-            .triangles
-            .iter()
-            .map(|p| (DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2])) - v.centre).length())
-            .fold(v.rb, f64::max)
-            * 1.02;
+        let reach = proxy_reach(e, v.centre, v.rb);
         let mut flux = 0.0;
         for (w, _) in &v.flux {
             flux += ortho_intensity(r, &mut targets, *w, v.centre, reach, cfg.ortho_px)?;

@@ -13,7 +13,7 @@ use glam::{DVec3, Mat4};
 
 use super::{ortho_intensity, EvalError};
 use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
-use crate::gpu::Renderer;
+use crate::gpu::{LuminaireId, Renderer};
 use crate::nearfield::pack::{write_pack, Pack, PackOptions};
 use crate::nearfield::proxy::triangles_of;
 use crate::nearfield::raykde::KdeScan;
@@ -108,34 +108,11 @@ pub fn check_intensity(
     c_step_deg: f64,
     progress: &dyn Fn(&str),
 ) -> Result<IntensityCheck, EvalError> {
-    let proxy = triangles_of(&est.proxy);
-    let rb = est
-        .proxy
-        .surfaces
-        .iter()
-        .flat_map(|s| s.positions.iter())
-        .map(|p| (*p - est.scan.set.sphere.centre_m).length())
-        .fold(0.0, f64::max)
-        * 1.02;
+    let rb = proxy_reach(&est, est.scan.set.sphere.centre_m, 0.0);
     let centre = est.scan.set.sphere.centre_m;
     let flux_lm = est.report.flux_lm;
     progress("packing the estimate");
-    write_pack(&est.scan, pack_path, &PackOptions::default(), &|_, _| {})?;
-    let pack = Arc::new(Pack::open(pack_path)?);
-    let opts = NearfieldOptions {
-        budget_bytes: 2 << 30,
-        proxy_is_bound: true,
-        ..NearfieldOptions::default()
-    };
-    let id = r.add_pack(pack, Some(proxy), &opts)?;
-    let inst = r.add_instance(id, Mat4::IDENTITY)?;
-    r.set_nearfield_settings(
-        inst,
-        NearfieldSettings {
-            mode: SelectionMode::Continuous,
-            proxy: true,
-        },
-    )?;
+    let id = add_bound_estimate(r, &est, pack_path, &PackOptions::default(), 2 << 30)?;
     // The estimate may have scaled the rays to the header's flux: the reference follows.
     let raw: f64 = (0..file.len())
         .filter_map(|i| file.ray(i)?.luminous_lm)
@@ -215,4 +192,49 @@ pub fn check_intensity(
         rows,
         peak_cd,
     })
+}
+
+/// The farthest point of `est`'s proxy from `centre` (at least `at_least`), × 1.02: a frame that
+/// holds all of the estimate's light, which reaches past the ray origins by its kernels (m).
+pub(crate) fn proxy_reach(est: &KdeScan, centre: DVec3, at_least: f64) -> f64 {
+    est.proxy
+        .surfaces
+        .iter()
+        .flat_map(|s| s.positions.iter())
+        .map(|p| (*p - centre).length())
+        .fold(at_least, f64::max)
+        * 1.02
+}
+
+/// Packs `est` to `pack_path` with `pack` and adds it to `r` with its proxy as a bound, one
+/// instance at the origin drawn with continuous selection and the proxy, as `render` and `pack`
+/// show ray files. Returns the luminaire (remove it when done).
+pub(crate) fn add_bound_estimate(
+    r: &mut Renderer,
+    est: &KdeScan,
+    pack_path: &Path,
+    pack: &PackOptions,
+    budget_bytes: u64,
+) -> Result<LuminaireId, EvalError> {
+    write_pack(&est.scan, pack_path, pack, &|_, _| {})?;
+    let opts = NearfieldOptions {
+        budget_bytes,
+        proxy_is_bound: true,
+        ..NearfieldOptions::default()
+    };
+    let id = r.add_pack(Arc::new(Pack::open(pack_path)?), Some(triangles_of(&est.proxy)), &opts)?;
+    let shown = r.add_instance(id, Mat4::IDENTITY).and_then(|inst| {
+        r.set_nearfield_settings(
+            inst,
+            NearfieldSettings {
+                mode: SelectionMode::Continuous,
+                proxy: true,
+            },
+        )
+    });
+    if let Err(e) = shown {
+        r.remove_luminaire(id)?;
+        return Err(e.into());
+    }
+    Ok(id)
 }

@@ -420,20 +420,16 @@ impl Bandwidths {
             })
     }
 
-    /// Gives every fine cell that other rays (`get`, `n` of them) fall in, and that holds none of
-    /// this estimate's rays, the widths this estimate would have given a ray there (the
-    /// k-nearest-neighbour angles of its own histogram, clamped as for its own rays), so that the
-    /// same operator applies to those rays ([`super::estimate_frozen`]). The histogram itself is
-    /// not changed.
-    pub fn cover(&mut self, get: RayGet<'_>, n: usize) {
+    /// Gives every fine cell that other rays fall in (`cells`, from [`Self::cell_rays`] of those
+    /// rays), and that holds none of this estimate's rays, the widths this estimate would have
+    /// given a ray there (the k-nearest-neighbour angles of its own histogram, clamped as for its
+    /// own rays), so that the same operator applies to those rays ([`super::estimate_frozen`]).
+    /// The histogram itself is not changed.
+    pub fn cover(&mut self, cells: &CellRays) {
         let m = self.fine_dirs.len();
-        let mut touched = vec![false; m];
-        for i in 0..n {
-            if let Some(j) = get(i).and_then(|(_, k, _)| self.fine.nearest(k)) {
-                touched[j] = true;
-            }
-        }
-        let new: Vec<usize> = (0..m).filter(|&j| touched[j] && self.cell_h[j] <= 0.0).collect();
+        let new: Vec<usize> = (0..m)
+            .filter(|&j| cells.starts[j + 1] > cells.starts[j] && self.cell_h[j] <= 0.0)
+            .collect();
         let widths: Vec<(usize, f64, f64)> = new
             .par_iter()
             .map(|&j| {

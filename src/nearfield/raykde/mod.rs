@@ -715,8 +715,8 @@ pub fn estimate_frozen(
     while let Some(batch) = next()? {
         let usable = |r: &(DVec3, DVec3, f64)| r.2 > 0.0 && r.2.is_finite() && r.0.is_finite() && r.1.is_finite();
         let get = |i: usize| batch.get(i).copied().filter(usable);
-        bw.cover(&get, batch.len());
         let cells = bw.cell_rays(&get, batch.len());
+        bw.cover(&cells);
         let gather = Gather {
             bw: &bw,
             cells: &cells,
