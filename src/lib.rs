@@ -3,6 +3,7 @@
 //! Modules (one-way dependencies, see `docs/architecture.md`):
 //! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
 //! - [`nearfield`]: near-field scans (pure CPU).
+//! - [`files`]: reading files with limits, writing outputs through temporary files (pure CPU).
 //! - [`gpu`]: wgpu renderer.
 //! - [`eval`]: the near-field quality harness (synthetic scans against the exact ray-caster).
 //! - [`interop`]: Vulkan external memory (the only ash / wgpu-hal code).
@@ -11,6 +12,7 @@
 
 pub mod eval;
 pub mod ffi;
+pub mod files;
 pub mod gpu;
 pub mod interop;
 pub mod nearfield;

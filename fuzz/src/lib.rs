@@ -30,7 +30,7 @@ fn finite_non_negative(what: &str, v: f64) {
 /// Decodes `data`, loads it under `name` (the extension picks the reader) and, when it loads,
 /// checks the property. Panics (a fuzzer finding) when the property fails.
 pub fn check(data: &[u8], name: &str) {
-    let text = decode(data);
+    let text = decode(data.to_vec());
     let Ok(p) = load_from_text(&text, name, &LoadOptions::default()) else {
         return;
     };

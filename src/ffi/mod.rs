@@ -109,6 +109,9 @@ impl From<GpuError> for FfiError {
 
 fn photometry_status(e: &PhotometryError) -> lumi_status {
     match e {
+        PhotometryError::Io { source, .. } if source.kind() == std::io::ErrorKind::OutOfMemory => {
+            LUMI_STATUS_OUT_OF_MEMORY
+        }
         PhotometryError::Io { .. } => LUMI_STATUS_IO,
         PhotometryError::Parse(_) => LUMI_STATUS_PARSE,
         PhotometryError::InvalidArgument { .. } => LUMI_STATUS_INVALID_ARGUMENT,
@@ -118,6 +121,7 @@ fn photometry_status(e: &PhotometryError) -> lumi_status {
 fn nearfield_status(e: &crate::nearfield::NearfieldError) -> lumi_status {
     use crate::nearfield::NearfieldError as N;
     match e {
+        N::Io { source, .. } if source.kind() == std::io::ErrorKind::OutOfMemory => LUMI_STATUS_OUT_OF_MEMORY,
         N::Io { .. } => LUMI_STATUS_IO,
         N::InvalidArgument { .. } => LUMI_STATUS_INVALID_ARGUMENT,
         N::Unsupported { .. } => LUMI_STATUS_UNSUPPORTED,

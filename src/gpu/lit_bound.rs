@@ -28,7 +28,7 @@ use rayon::prelude::*;
 
 use crate::nearfield::pack::{Pack, EMPTY_TILE};
 use crate::nearfield::select::{Selection, SelectionMode};
-use crate::nearfield::RayImageSet;
+use crate::nearfield::{NearfieldError, RayImageSet};
 
 /// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
 /// How far (camera pixels) a kept tile can light a sample outside it: the bilinear footprint reaches
@@ -70,7 +70,9 @@ impl LitDirections {
     /// convex hull of its lit pixels where `pixels` (which reads the tiles at the ends of every tile
     /// row: for a pack that goes to the GPU whole, whose pages are read anyway), else of its kept
     /// tiles (from the tile tables alone: a streamed pack's pages are read when they are needed).
-    pub fn new(set: &RayImageSet, pack: &Pack, sel: &Selection, pixels: bool) -> Self {
+    ///
+    /// Errors: a tile that cannot be read or decoded (a damaged page), naming the pack and page.
+    pub fn new(set: &RayImageSet, pack: &Pack, sel: &Selection, pixels: bool) -> Result<Self, NearfieldError> {
         let t = f64::from(pack.layout().tile_size);
         let dirs = sel.vertex_directions();
         let angle = |a: DVec3, b: DVec3| a.cross(b).length().atan2(a.dot(b));
@@ -107,9 +109,11 @@ impl LitDirections {
             .into_par_iter()
             .map(|i| {
                 let (c, e) = (&set.cameras[i], &pack.images()[i]);
-                let v = vertex_of[i]?;
+                let Some(v) = vertex_of[i] else {
+                    return Ok(None);
+                };
                 if e.bbox.w == 0 || e.bbox.h == 0 {
-                    return None;
+                    return Ok(None);
                 }
                 let k = set.intrinsics_of(i);
                 let dir = |px: f64, py: f64| {
@@ -119,8 +123,8 @@ impl LitDirections {
                 // Per pixel row, the leftmost and rightmost lit pixel (widened by the footprint),
                 // read from the kept tiles of its tile row from either end inwards until every pixel
                 // row has found its light (a row dark in the first kept tile has its light further
-                // in, where a slanted edge crosses the tile row). A tile that is not read (or cannot
-                // be) counts as lit throughout.
+                // in, where a slanted edge crosses the tile row). Without `pixels` a kept tile counts
+                // as lit throughout.
                 let table = pack.tile_table(i).unwrap_or(&[]);
                 let ts = t as usize;
                 let mut pts = Vec::new();
@@ -149,7 +153,9 @@ impl LitDirections {
                                 break;
                             }
                             let x_tile = (e.bbox.x0 as usize + k) * ts;
-                            let readable = pixels && pack.decode_slot(row[k], &mut values).is_ok();
+                            // A damaged page is an error at once (the pack remembers it), not a tile
+                            // taken as lit and read again for every tile of every row.
+                            let readable = pixels && pack.decode_slot(row[k], &mut values).map(|_| true)?;
                             for (y, o) in out.iter_mut().enumerate() {
                                 if o.is_some() {
                                     continue;
@@ -180,18 +186,18 @@ impl LitDirections {
                 }
                 let hull = convex_hull(pts);
                 if hull.len() < 3 {
-                    return None;
+                    return Ok(None);
                 }
                 // 1 % and 10⁻⁶ rad of margin over the exact radii (rounding at triangle edges).
                 let grow = |r: f64| r * 1.01 + 1e-6;
-                Some(CameraCone {
+                Ok(Some(CameraCone {
                     corners: hull.iter().map(|h| dir(f64::from(h.0), f64::from(h.1))).collect(),
                     vertex: dirs[v],
                     rho: [grow(circ[v]), grow(max_gap), grow(edge[v])],
                     cell: cells[v].clone().filter(|c| c.len() >= 3),
-                })
+                }))
             })
-            .collect();
+            .collect::<Result<Vec<_>, NearfieldError>>()?;
         let vertex_rho = (0..dirs.len())
             .map(|v| {
                 [circ[v], max_gap, edge[v]].map(|r| {
@@ -200,11 +206,11 @@ impl LitDirections {
                 })
             })
             .collect();
-        LitDirections {
+        Ok(LitDirections {
             cameras,
             vertex_rho,
             sphere: (set.sphere.centre_m, set.sphere.radius_m),
-        }
+        })
     }
 
     /// The bounding polygon of a perspective view from `eye` (luminaire frame, m) in `mode` for the

@@ -977,7 +977,7 @@ impl NearfieldPass {
                 pages,
                 chunks_per_page,
                 pool_layout,
-                lit: LitDirections::new(set, &pack, &selection, fully_resident),
+                lit: LitDirections::new(set, &pack, &selection, fully_resident)?,
                 bounding_polygon: opts.bounding_polygon,
                 has_bvh: bvh.is_some(),
                 bind,

@@ -510,6 +510,9 @@ impl ImageSource for FileSource {
         img.validate(name, k)?;
         Ok(img)
     }
+    fn input_files(&self) -> Vec<PathBuf> {
+        self.files.clone()
+    }
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -26,6 +26,9 @@ pub fn triangles_of(mesh: &ProxyMesh) -> Vec<[f32; 3]> {
     out
 }
 
+/// Largest glTF file (and each buffer file it names) read as a proxy: 1 GiB.
+pub const MAX_GLTF_BYTES: u64 = 1 << 30;
+
 /// Loads a proxy mesh from a glTF 2.0 file (`.glb`, or `.gltf` with its buffers in files beside it
 /// or embedded as base64 data URIs) as luminaire-frame triangles.
 ///
@@ -33,7 +36,8 @@ pub fn triangles_of(mesh: &ProxyMesh) -> Vec<[f32; 3]> {
 /// triangles, non-triangle primitives, buffers that are missing or too short, non-finite positions
 /// ([`NearfieldError::Format`] naming the file and what is wrong).
 pub fn load_gltf(path: &Path) -> Result<Vec<[f32; 3]>> {
-    let bytes = std::fs::read(path).map_err(|e| NearfieldError::io(path, e))?;
+    let bytes =
+        crate::files::read_regular(path, MAX_GLTF_BYTES, "a glTF proxy").map_err(|e| NearfieldError::io(path, e))?;
     let bad = |m: String| NearfieldError::format(path, m);
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(format!("not a glTF 2.0 file: {e}")))?;
     let mut buffers: Vec<Vec<u8>> = Vec::new();
@@ -51,7 +55,8 @@ pub fn load_gltf(path: &Path) -> Result<Vec<[f32; 3]>> {
                     decode_base64(b64).ok_or_else(|| bad(format!("buffer {} has bad base64", b.index())))?
                 } else {
                     let file = path.parent().unwrap_or(Path::new(".")).join(uri);
-                    std::fs::read(&file).map_err(|e| NearfieldError::io(&file, e))?
+                    crate::files::read_regular(&file, MAX_GLTF_BYTES, "a glTF buffer")
+                        .map_err(|e| NearfieldError::io(&file, e))?
                 }
             }
         };

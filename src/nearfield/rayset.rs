@@ -295,6 +295,12 @@ impl LuminanceImage {
 pub trait ImageSource: Send + Sync {
     /// The luminance image of camera `index` (cd/m²), sized by that camera's intrinsics.
     fn image(&self, index: usize) -> Result<LuminanceImage>;
+
+    /// The files the images are read from (a manifest's image files, a pack), so that a writer
+    /// never replaces one of them with its output. Default: none (images in memory or computed).
+    fn input_files(&self) -> Vec<std::path::PathBuf> {
+        Vec::new()
+    }
 }
 
 /// Cameras, sphere and intrinsics of a scan (its images come from an [`ImageSource`]).

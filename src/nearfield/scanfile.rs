@@ -21,9 +21,11 @@
 //! `<temp>/lumiview-cache/packs`), and `<key>` is a 64-bit FNV-1a hash (16 hex digits) of the
 //! input's canonical path, length and modification time and of the pack format and defaults used.
 //! Editing the input gives a new key; images a manifest refers to are not part of the key (delete the
-//! cached file to re-pack after changing only them). A cached file that does not open is packed
-//! again. Packs are written under a unique temporary name and renamed into place, so two processes
-//! loading the same file at once never see a half-written pack. Nothing removes old cache entries.
+//! cached file to re-pack after changing only them). A cached file is verified page by page and
+//! tile by tile each time it is opened ([`Pack::verify`]); one that does not open or verify is
+//! packed again. Packs are written under a unique temporary name and renamed into place, so two
+//! processes loading the same file at once never see a half-written pack. Nothing removes old cache
+//! entries.
 
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
@@ -31,7 +33,7 @@ use std::time::UNIX_EPOCH;
 
 use super::error::{NearfieldError, Result};
 use super::manifest::{load_scan, ImportOptions};
-use super::pack::{write_pack, Pack, PackOptions, PackProxy};
+use super::pack::{write_pack, OpenOptions, Pack, PackOptions, PackProxy};
 use super::proxy::triangles_of;
 use super::raykde;
 use super::tm25::RayFile;
@@ -58,9 +60,13 @@ const CACHE_VERSION: &str =
 /// Reads the first bytes of `path` and says which kind of scan file it is, or `None` for anything
 /// else (photometry, garbage).
 ///
-/// Errors: [`NearfieldError::Io`] naming the file when it cannot be opened or read.
+/// Errors: [`NearfieldError::Io`] naming the file when it cannot be opened or read, or is not a
+/// regular file (a FIFO or device is refused before it is opened); [`NearfieldError::Format`] for
+/// a file named `.lvpack` without the pack's magic (empty, half-written or damaged: it is never
+/// handed to another reader).
 pub fn detect(path: &Path) -> Result<Option<ScanFileKind>> {
-    let mut f = std::fs::File::open(path).map_err(|e| NearfieldError::io(path, e))?;
+    let (mut f, len) =
+        crate::files::open_regular(path, u64::MAX, "a luminaire file").map_err(|e| NearfieldError::io(path, e))?;
     let mut buf = vec![0u8; SNIFF_BYTES];
     let mut n = 0;
     while n < buf.len() {
@@ -71,7 +77,23 @@ pub fn detect(path: &Path) -> Result<Option<ScanFileKind>> {
             Err(e) => return Err(NearfieldError::io(path, e)),
         }
     }
-    Ok(kind_of(&buf[..n]))
+    let kind = kind_of(&buf[..n]);
+    let named_pack = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case(super::pack::EXTENSION));
+    if kind.is_none() && named_pack {
+        return Err(NearfieldError::format(
+            path,
+            if len == 0 {
+                "the file is empty, not a .lvpack (a pack whose writing failed?)".to_string()
+            } else if buf[..n].iter().all(|&b| b == 0) {
+                "the header is zero, not a .lvpack's (a half-written or damaged pack?)".to_string()
+            } else {
+                "no LVPACK magic at the start: not a .lvpack".to_string()
+            },
+        ));
+    }
+    Ok(kind)
 }
 
 /// The kind of scan file whose first bytes are `head`.
@@ -246,29 +268,31 @@ pub fn open_scan_of_kind_with_warnings(
     let dir = cache_dir.map_or_else(default_cache_dir, Path::to_path_buf);
     let cached = cache_path(path, &dir)?;
     if cached.is_file() {
-        if let Ok(p) = Pack::open(&cached) {
-            return Ok((p, Some(cached)));
+        // Every page is checked: a damaged cache entry is packed again from its source instead of
+        // failing every render that uses it.
+        let verify = OpenOptions {
+            verify_pages: true,
+            ..OpenOptions::default()
+        };
+        match Pack::open_with(&cached, &verify) {
+            Ok(p) => return Ok((p, Some(cached))),
+            Err(e) => warnings.push(format!(
+                "{}: the cached pack {} is damaged ({e}); packing it again",
+                path.display(),
+                cached.display()
+            )),
         }
     }
     let (scan, source, proxy) = scan_from_file_with_warnings(path, kind, warnings)?;
     std::fs::create_dir_all(&dir).map_err(|e| NearfieldError::io(&dir, e))?;
-    let nonce = std::time::SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map_or(0, |d| d.subsec_nanos());
-    let tmp = cached.with_extension(format!("{}-{nonce}.tmp.lvpack", std::process::id()));
     let opts = PackOptions {
         source,
         proxy,
         ..PackOptions::default()
     };
-    if let Err(e) = write_pack(&scan, &tmp, &opts, &|_, _| {}) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    if let Err(e) = std::fs::rename(&tmp, &cached) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(NearfieldError::io(&cached, e));
-    }
+    // Written under a unique temporary name and renamed into place (two processes loading the same
+    // file at once each write their own; a reader never sees a half-written pack).
+    write_pack(&scan, &cached, &opts, &|_, _| {})?;
     Ok((Pack::open(&cached)?, Some(cached)))
 }
 

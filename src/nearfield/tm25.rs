@@ -675,14 +675,12 @@ impl RayFile {
     /// Reads a TM-25 file. Sizes are checked against the file size before anything is allocated.
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let file = File::open(path).map_err(|e| NearfieldError::io(path, e))?;
-        let meta = file.metadata().map_err(|e| NearfieldError::io(path, e))?;
-        if !meta.is_file() {
-            return Err(NearfieldError::format(path, "not a regular file"));
-        }
+        // A FIFO or device is refused before it is opened (opening a FIFO blocks).
+        let (file, len) =
+            crate::files::open_regular(path, u64::MAX, "a TM-25 ray file").map_err(|e| NearfieldError::io(path, e))?;
         let input = Input {
             src: Src::File(BufReader::with_capacity(1 << 16, file)),
-            len: meta.len(),
+            len,
             pos: 0,
             path,
         };

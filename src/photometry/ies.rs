@@ -6,7 +6,7 @@
 //! lines).
 
 use super::error::{parse_error, ParseError, PhotometryError};
-use super::text::{lines, Tokens};
+use super::text::{Lines, Tokens};
 
 /// The LM-63 edition a file follows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, serde::Serialize)]
@@ -255,27 +255,33 @@ pub fn parse(
     file: &str,
     load_tilt: &dyn Fn(&str) -> Result<String, PhotometryError>,
 ) -> Result<IesFile, PhotometryError> {
-    let ls = lines(text);
-    if ls.iter().all(|l| l.trim().is_empty()) {
+    if text
+        .trim_matches(|c: char| c.is_whitespace() || c == '\u{1a}')
+        .is_empty()
+    {
         return Err(parse_error(file, Some(1), "header", "the file is empty").into());
     }
     let mut warnings = Vec::new();
-    let (version, mut i) = match detect_version(ls[0]) {
-        Some(v) => (v, 1),
-        None => (IesVersion::Lm63_1986, 0),
+    // Lines are read one at a time (a file of millions of lines costs no line table).
+    let mut ls = Lines::new(text);
+    let version = match ls.clone().next().and_then(detect_version) {
+        Some(v) => {
+            ls.next();
+            v
+        }
+        None => IesVersion::Lm63_1986,
     };
     let mut keywords: Vec<(String, String)> = Vec::new();
     let mut labels = Vec::new();
     let mut tilt_line = None;
-    while i < ls.len() {
-        let line = ls[i];
+    while let Some(line) = ls.next() {
+        let i = ls.count - 1;
         if let Some(v) = tilt_value(line) {
             tilt_line = Some((i, v));
             break;
         }
         let t = line.trim();
         if t.is_empty() {
-            i += 1;
             continue;
         }
         if let Some(rest) = t.strip_prefix('[') {
@@ -296,7 +302,6 @@ pub fn parse(
                 } else {
                     keywords.push((key, value));
                 }
-                i += 1;
                 continue;
             }
         }
@@ -304,18 +309,17 @@ pub fn parse(
             warnings.push(format!("line {}: not a keyword line; kept as a label", i + 1));
         }
         labels.push(t.to_string());
-        i += 1;
     }
     let Some((tilt_idx, tilt_text)) = tilt_line else {
         return Err(parse_error(
             file,
-            Some(ls.len()),
+            Some(ls.count),
             "TILT",
             "no line starting with `TILT=` found (truncated or not an IES file?)",
         )
         .into());
     };
-    let mut tokens = Tokens::new(file, &ls[tilt_idx + 1..], tilt_idx + 2, true);
+    let mut tokens = Tokens::new(file, ls.rest(), tilt_idx + 2, true);
     let tilt = if tilt_text.eq_ignore_ascii_case("NONE") {
         None
     } else if tilt_text.eq_ignore_ascii_case("INCLUDE") {
@@ -337,9 +341,9 @@ pub fn parse(
                 format!("the TILT file `{tilt_text}` named here cannot be read: {e}"),
             )
         })?;
-        let tls = lines(&tilt_src);
         let tilt_file_label = format!("{file} (TILT file {tilt_text})");
-        let mut tt = Tokens::new(&tilt_file_label, &tls, 1, true);
+        // The named file may be anything: errors say what was expected, never what is there.
+        let mut tt = Tokens::new(&tilt_file_label, &tilt_src, 1, true).without_quotes();
         Some(read_tilt(
             &mut tt,
             &tilt_file_label,
@@ -380,8 +384,21 @@ pub fn parse(
         )
         .into());
     }
+    let counts_line = tokens.line();
     let n_vert = tokens.count("number of vertical angles", 1, 100_000)? as usize;
     let n_horiz = tokens.count("number of horizontal angles", 1, 100_000)? as usize;
+    if n_vert.saturating_mul(n_horiz) > super::luminaire::MAX_TABLE_VALUES {
+        return Err(parse_error(
+            file,
+            Some(counts_line),
+            "number of vertical angles",
+            format!(
+                "{n_vert} vertical × {n_horiz} horizontal angles is more than the {} candela values lumiview reads",
+                super::luminaire::MAX_TABLE_VALUES
+            ),
+        )
+        .into());
+    }
     let type_line = tokens.line();
     let ptype = tokens.number("photometric type")?;
     let photometric_type = match ptype {
@@ -462,7 +479,7 @@ pub fn parse(
     let vertical_deg = tokens.numbers(n_vert, "vertical angles")?;
     let horizontal_deg = tokens.numbers(n_horiz, "horizontal angles")?;
     let total = n_vert.saturating_mul(n_horiz);
-    let mut candela = Vec::with_capacity(total.min(tokens.remaining()));
+    let mut candela = Vec::with_capacity(total.min(tokens.upper_bound()));
     // Negative values: count, smallest, its index and line.
     let mut negative: Option<(usize, f64, usize, usize)> = None;
     for _ in 0..total {
@@ -509,11 +526,11 @@ pub fn parse(
             candela[k * n_vert..(k + 1) * n_vert].copy_from_slice(&old[i * n_vert..(i + 1) * n_vert]);
         }
     }
-    if tokens.remaining() > 0 {
+    if tokens.has_more() {
+        let line = tokens.line();
         warnings.push(format!(
-            "line {}: {} values after the candela table ignored (only the first luminaire data set is read)",
-            tokens.line(),
-            tokens.remaining()
+            "line {line}: {} values after the candela table ignored (only the first luminaire data set is read)",
+            tokens.count_rest()
         ));
     }
     Ok(IesFile {
@@ -604,6 +621,14 @@ mod tests {
             "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 100000 100000 1 2 0 0 0\n1 1 10\n{}\n{}\n0 0\n",
             angles(100_000),
             angles(100_000)
+        );
+        let e = parse(&t, "big.ies", &no_tilt).unwrap_err().to_string();
+        assert!(e.contains("more than the 2000000 candela values"), "{e}");
+        // Within the limit: the declared table is not allocated before the values are there.
+        let t = format!(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 1000 1 1000 1000 1 2 0 0 0\n1 1 10\n{}\n{}\n0 0\n",
+            angles(1000),
+            angles(1000)
         );
         let e = parse(&t, "big.ies", &no_tilt).unwrap_err().to_string();
         assert!(e.contains("candela values") && e.contains("truncated"), "{e}");

@@ -2,7 +2,7 @@
 //! 1000 lm of lamp flux (or absolute cd when the lamp count is negative).
 
 use super::error::{parse_error, ParseError};
-use super::text::{lines, to_count, Tokens};
+use super::text::{to_count, Lines, Tokens};
 
 /// One lamp set. Several sets are alternative equipment, not additive.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -96,15 +96,14 @@ impl LdtFile {
 
 /// Parses EULUMDAT text; `file` names the file in errors.
 pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
-    let ls = lines(text);
-    let mut n = 0usize; // index of the next line
+    // Lines are read one at a time (a file of millions of lines costs no line table).
+    let mut ls = Lines::new(text);
     let mut warnings = Vec::new();
     let mut next_line = |field: &str| -> Result<(usize, String), ParseError> {
-        if n >= ls.len() {
-            return Err(parse_error(file, Some(ls.len()), field, "file ends here (truncated?)"));
+        match ls.next() {
+            Some(l) => Ok((ls.count, l.trim().to_string())),
+            None => Err(parse_error(file, Some(ls.count), field, "file ends here (truncated?)")),
         }
-        n += 1;
-        Ok((n, ls[n - 1].trim().to_string()))
     };
     fn num(file: &str, (line, text): (usize, String), field: &str) -> Result<f64, ParseError> {
         let t = text.replace(',', ".");
@@ -247,9 +246,8 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
             watts,
         });
     }
-    let rest_start = n;
-    let rest: Vec<&str> = ls[rest_start..].to_vec();
-    let mut tokens = Tokens::new(file, &rest, rest_start + 1, false);
+    let rest_start = ls.count;
+    let mut tokens = Tokens::new(file, ls.rest(), rest_start + 1, false);
     let mut direct_ratios = [0.0; 10];
     for d in &mut direct_ratios {
         *d = tokens.number_comma_decimal("direct ratios")?;
@@ -307,7 +305,18 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
     // Mc and Ng come from the file: reserve no more than the numbers left (a huge table declared
     // in a short file fails with "truncated" instead of allocating gigabytes first).
     let table_len = planes.saturating_mul(ng);
-    let mut intensities = Vec::with_capacity(table_len.min(tokens.remaining()));
+    if mc.saturating_mul(ng) > super::luminaire::MAX_TABLE_VALUES {
+        return Err(parse_error(
+            file,
+            Some(mc_line),
+            "number of C planes Mc",
+            format!(
+                "{mc} C planes × {ng} γ angles is more than the {} intensity values lumiview reads",
+                super::luminaire::MAX_TABLE_VALUES
+            ),
+        ));
+    }
+    let mut intensities = Vec::with_capacity(table_len.min(tokens.upper_bound()));
     let mut negative: Option<(usize, f64)> = None;
     let mut negative_count = 0usize;
     for _ in 0..table_len {
@@ -343,11 +352,11 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
             }
         }
     }
-    if tokens.remaining() > 0 {
+    if tokens.has_more() {
+        let line = tokens.line();
         lf.warnings.push(format!(
-            "line {}: {} values after the intensity table ignored",
-            tokens.line(),
-            tokens.remaining()
+            "line {line}: {} values after the intensity table ignored",
+            tokens.count_rest()
         ));
     }
     lf.intensities = intensities;
@@ -372,6 +381,10 @@ mod tests {
             }
         }
         t.push_str("0\n");
+        let e = parse(&t, "big.ldt").unwrap_err();
+        assert!(e.message.contains("more than the 2000000 intensity values"), "{e}");
+        // Within the limit (Mc = 10): the declared table is not allocated before the values are there.
+        let t = t.replacen("X\n1\n0\n100000\n", "X\n1\n0\n10\n", 1);
         let e = parse(&t, "big.ldt").unwrap_err();
         assert!(
             e.field == "luminous intensities" && e.message.contains("truncated"),

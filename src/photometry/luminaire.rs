@@ -141,11 +141,28 @@ impl Photometry {
 }
 
 /// Reads a photometric file (IES or EULUMDAT, detected from the extension, else the contents).
+///
+/// Errors: a path that is not a regular file or is longer than [`MAX_PHOTOMETRY_FILE_BYTES`]
+/// (refused before reading), binary data (a NUL byte), and every parse error, each naming the file.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<Photometry, PhotometryError> {
-    let bytes = std::fs::read(path).map_err(|source| PhotometryError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes =
+        crate::files::read_regular(path, MAX_PHOTOMETRY_FILE_BYTES, "an IES or EULUMDAT file").map_err(|source| {
+            PhotometryError::Io {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+    if let Some(at) = bytes.iter().position(|&b| b == 0) {
+        return Err(super::error::parse_error(
+            &path.display().to_string(),
+            None,
+            "file",
+            format!(
+                "byte {at} is NUL: binary data, not an IES or EULUMDAT text file (a half-written or damaged file?)"
+            ),
+        )
+        .into());
+    }
     let name = path.display().to_string();
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let load_tilt = move |tilt_name: &str| -> Result<String, PhotometryError> {
@@ -156,21 +173,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Photometry, PhotometryErr
         };
         // Only a regular file of plausible size: a device or FIFO named in a file must not hang
         // or exhaust memory.
-        let meta = std::fs::metadata(&p).map_err(io)?;
-        if !meta.is_file() || meta.len() > MAX_TILT_FILE_BYTES {
-            return Err(io(std::io::Error::new(
-                std::io::ErrorKind::InvalidInput,
-                format!("not a regular file of at most {MAX_TILT_FILE_BYTES} bytes"),
-            )));
-        }
-        std::fs::read(&p).map(|b| decode(&b)).map_err(io)
+        crate::files::read_regular(&p, MAX_TILT_FILE_BYTES, "a TILT file")
+            .map(decode)
+            .map_err(io)
     };
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .unwrap_or_default();
-    let text = decode(&bytes);
+    let text = decode(bytes);
     let is_ldt = match ext.as_str() {
         "ldt" => true,
         "ies" => false,
@@ -225,6 +237,14 @@ fn looks_like_ies(text: &str) -> bool {
 
 /// Largest TILT file read, bytes.
 pub const MAX_TILT_FILE_BYTES: u64 = 1 << 20;
+
+/// Largest IES or EULUMDAT file read (32 MiB; published files are well under 1 MiB, a 0.1° × 1°
+/// full-sphere table about 5 MiB). Larger files are refused before reading.
+pub const MAX_PHOTOMETRY_FILE_BYTES: u64 = 32 << 20;
+
+/// Most intensity values in one table (C planes × γ angles): 2,000,000, e.g. 0.1° × 0.1° over a
+/// hemisphere. A larger declared table is refused before anything is allocated.
+pub const MAX_TABLE_VALUES: usize = 2_000_000;
 
 /// Largest luminous-opening dimension accepted, metres.
 pub const MAX_OPENING_M: f64 = 1000.0;

@@ -358,8 +358,8 @@ pub fn plane_spread(web: &PhotometricWeb, c_deg: f64) -> PlaneSpread {
 }
 
 /// Warnings for a file that parses but is implausible: a light output ratio above 100 %
-/// (declared or integrated), and a declared luminaire flux more than 5 % from the integrated one.
-/// Each names the file.
+/// (declared or integrated), a declared luminaire flux more than 5 % from the integrated one, no
+/// light at all or a peak below [`MIN_PLAUSIBLE_PEAK_CD`]. Each names the file.
 pub fn plausibility_warnings(p: &Photometry) -> Vec<String> {
     let mut w = Vec::new();
     let flux = p.flux_lm();
@@ -389,11 +389,21 @@ pub fn plausibility_warnings(p: &Photometry) -> Vec<String> {
             ));
         }
     }
-    if flux <= 0.0 {
+    let peak_cd = p.web.max_intensity().0;
+    if flux <= 0.0 || peak_cd <= 0.0 {
         w.push(format!("{name}: every intensity is zero: the file emits no light"));
+    } else if peak_cd < MIN_PLAUSIBLE_PEAK_CD {
+        w.push(format!(
+            "{name}: the peak intensity {peak_cd:e} cd is implausibly small (below {MIN_PLAUSIBLE_PEAK_CD:e} cd: wrong \
+             multiplier or units?); renders and tables will show no light"
+        ));
     }
     w
 }
+
+/// Below this peak intensity a file is implausible (a millicandela indicator LED is 10⁻³ cd; the
+/// renderer's 32-bit floats cannot hold luminances from much smaller values).
+pub const MIN_PLAUSIBLE_PEAK_CD: f64 = 1e-6;
 
 #[cfg(test)]
 mod tests {

@@ -3,47 +3,67 @@
 
 use super::error::{parse_error, ParseError};
 
-/// Decodes file bytes: UTF-8 when valid, otherwise Latin-1 (every byte is one code point), which is
-/// what photometric files with `°` or umlauts written on Windows contain.
-pub fn decode(bytes: &[u8]) -> String {
+/// Decodes file bytes: UTF-8 when valid (without a copy), otherwise Latin-1 (every byte is one code
+/// point), which is what photometric files with `°` or umlauts written on Windows contain.
+pub fn decode(mut bytes: Vec<u8>) -> String {
     // A UTF-8 byte-order mark is dropped.
-    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
-    match std::str::from_utf8(bytes) {
-        Ok(s) => s.to_string(),
-        Err(_) => bytes.iter().map(|&b| char::from(b)).collect(),
+    if bytes.starts_with(b"\xEF\xBB\xBF") {
+        bytes.drain(..3);
+    }
+    match String::from_utf8(bytes) {
+        Ok(s) => s,
+        Err(e) => e.into_bytes().iter().map(|&b| char::from(b)).collect(),
     }
 }
 
-/// Splits text into lines, accepting LF, CRLF and lone CR terminators. Trailing whitespace and
-/// a DOS end-of-file marker (0x1A) are kept out of the lines.
-pub fn lines(text: &str) -> Vec<&str> {
-    let mut out = Vec::new();
-    let mut start = 0;
-    let bytes = text.as_bytes();
-    let mut i = 0;
-    while i < bytes.len() {
-        match bytes[i] {
-            b'\n' => {
-                out.push(&text[start..i]);
-                start = i + 1;
-            }
-            b'\r' => {
-                out.push(&text[start..i]);
-                if i + 1 < bytes.len() && bytes[i + 1] == b'\n' {
-                    i += 1;
-                }
-                start = i + 1;
-            }
-            _ => {}
+/// Whether `c` ends a line's content: trailing white space and a DOS end-of-file marker (0x1A).
+fn trailing(c: char) -> bool {
+    c.is_whitespace() || c == '\u{1a}'
+}
+
+/// The lines of a text, one at a time (nothing is collected: a file of millions of short lines
+/// costs no memory), accepting LF, CRLF and lone CR terminators. Trailing whitespace and a DOS
+/// end-of-file marker (0x1A) are kept out of the lines.
+#[derive(Debug, Clone)]
+pub struct Lines<'a> {
+    rest: &'a str,
+    /// Lines returned so far.
+    pub count: usize,
+}
+
+impl<'a> Lines<'a> {
+    /// The lines of `text`.
+    pub fn new(text: &'a str) -> Self {
+        Lines { rest: text, count: 0 }
+    }
+
+    /// The text after the lines returned so far.
+    pub fn rest(&self) -> &'a str {
+        self.rest
+    }
+}
+
+impl<'a> Iterator for Lines<'a> {
+    type Item = &'a str;
+    fn next(&mut self) -> Option<&'a str> {
+        if self.rest.is_empty() {
+            return None;
         }
-        i += 1;
+        let bytes = self.rest.as_bytes();
+        let (line, next) = match bytes.iter().position(|&b| b == b'\n' || b == b'\r') {
+            Some(i) if bytes[i] == b'\r' && bytes.get(i + 1) == Some(&b'\n') => (&self.rest[..i], i + 2),
+            Some(i) => (&self.rest[..i], i + 1),
+            None => (self.rest, self.rest.len()),
+        };
+        self.rest = &self.rest[next..];
+        self.count += 1;
+        Some(line.trim_end_matches(trailing))
     }
-    if start < text.len() {
-        out.push(&text[start..]);
-    }
-    out.into_iter()
-        .map(|l| l.trim_end_matches(|c: char| c.is_whitespace() || c == '\u{1a}'))
-        .collect()
+}
+
+/// Splits text into lines ([`Lines`], collected; for short texts and tests).
+pub fn lines(text: &str) -> Vec<&str> {
+    Lines::new(text).collect()
 }
 
 /// One whitespace- or comma-separated token and the 1-based line it came from.
@@ -55,74 +75,144 @@ pub struct Token<'a> {
     pub line: usize,
 }
 
-/// A stream of numeric tokens over a range of lines. Records may span lines or share them: the
-/// reader consumes counts, not lines (LM-63-2002 §3: delimiters are commas, spaces or line ends).
+/// A stream of numeric tokens over a text, read as they are asked for (nothing is collected, so
+/// memory does not grow with the file). Records may span lines or share them: the reader consumes
+/// counts, not lines (LM-63-2002 §3: delimiters are commas, spaces or line ends).
 pub struct Tokens<'a> {
     file: &'a str,
-    tokens: Vec<Token<'a>>,
-    pos: usize,
-    last_line: usize,
+    rest: &'a str,
+    /// Line of the start of `rest` (1-based).
+    line: usize,
+    comma_is_delimiter: bool,
+    /// Whether errors may quote a token (not for a referenced file that may be anything).
+    quote: bool,
+    peeked: Option<Token<'a>>,
 }
 
 impl<'a> Tokens<'a> {
-    /// Tokenises `lines` (the first of which is line `first_line`, 1-based). When `comma_is_delimiter`
-    /// is false a comma is a decimal separator (EULUMDAT), otherwise a delimiter (IES).
-    pub fn new(file: &'a str, lines: &[&'a str], first_line: usize, comma_is_delimiter: bool) -> Self {
-        let mut tokens = Vec::new();
-        for (i, l) in lines.iter().enumerate() {
-            let split = l.split(|c: char| c.is_whitespace() || (comma_is_delimiter && c == ','));
-            for t in split.filter(|t| !t.is_empty()) {
-                tokens.push(Token {
-                    text: t,
-                    line: first_line + i,
-                });
-            }
-        }
-        let last_line = first_line + lines.len().saturating_sub(1);
+    /// The tokens of `text`, whose first line is line `first_line` (1-based). When
+    /// `comma_is_delimiter` is false a comma is a decimal separator (EULUMDAT), otherwise a
+    /// delimiter (IES).
+    pub fn new(file: &'a str, text: &'a str, first_line: usize, comma_is_delimiter: bool) -> Self {
         Tokens {
             file,
-            tokens,
-            pos: 0,
-            last_line,
+            rest: text,
+            line: first_line,
+            comma_is_delimiter,
+            quote: true,
+            peeked: None,
         }
     }
 
-    /// Number of tokens not yet consumed.
-    pub fn remaining(&self) -> usize {
-        self.tokens.len() - self.pos
+    /// Errors say what was expected but never quote the text found (for a file named by another,
+    /// which may be anything: `TILT=/etc/passwd`).
+    pub fn without_quotes(mut self) -> Self {
+        self.quote = false;
+        self
+    }
+
+    fn is_delimiter(&self, c: char) -> bool {
+        c.is_whitespace() || c == '\u{1a}' || (self.comma_is_delimiter && c == ',')
+    }
+
+    /// Skips delimiters (counting line ends) and cuts the next token.
+    fn advance(&mut self) -> Option<Token<'a>> {
+        let bytes = self.rest.as_bytes();
+        let mut i = 0;
+        while i < bytes.len() {
+            match bytes[i] {
+                b'\n' => self.line += 1,
+                b'\r' => {
+                    if bytes.get(i + 1) != Some(&b'\n') {
+                        self.line += 1;
+                    }
+                }
+                _ => {
+                    let c = self.rest[i..].chars().next().unwrap_or(' ');
+                    if !self.is_delimiter(c) {
+                        break;
+                    }
+                    i += c.len_utf8();
+                    continue;
+                }
+            }
+            i += 1;
+        }
+        let rest = &self.rest[i..];
+        let end = rest
+            .char_indices()
+            .find(|&(_, c)| self.is_delimiter(c))
+            .map_or(rest.len(), |(k, _)| k);
+        if end == 0 {
+            self.rest = "";
+            return None;
+        }
+        let tok = Token {
+            text: &rest[..end],
+            line: self.line,
+        };
+        self.rest = &rest[end..];
+        Some(tok)
+    }
+
+    fn peek(&mut self) -> Option<Token<'a>> {
+        if self.peeked.is_none() {
+            self.peeked = self.advance();
+        }
+        self.peeked
+    }
+
+    fn take(&mut self) -> Option<Token<'a>> {
+        self.peek();
+        self.peeked.take()
+    }
+
+    /// An upper bound of the tokens not yet consumed (each needs a character and a delimiter), for
+    /// reserving memory: a huge declared count in a short file never allocates more than the file.
+    pub fn upper_bound(&self) -> usize {
+        usize::from(self.peeked.is_some()) + self.rest.len().div_ceil(2)
+    }
+
+    /// Counts the tokens not yet consumed (reads them all; for a warning about trailing data).
+    pub fn count_rest(&mut self) -> usize {
+        let mut n = 0;
+        while self.take().is_some() {
+            n += 1;
+        }
+        n
+    }
+
+    /// Whether any token is left.
+    pub fn has_more(&mut self) -> bool {
+        self.peek().is_some()
     }
 
     /// The line of the next token (or of the end of the input).
-    pub fn line(&self) -> usize {
-        self.tokens.get(self.pos).map_or(self.last_line, |t| t.line)
+    pub fn line(&mut self) -> usize {
+        self.peek().map_or(self.line, |t| t.line)
+    }
+
+    fn next_or_truncated(&mut self, field: &str) -> Result<Token<'a>, ParseError> {
+        self.take().ok_or_else(|| {
+            parse_error(
+                self.file,
+                Some(self.line),
+                field,
+                "file ends here (truncated?): expected a number",
+            )
+        })
     }
 
     /// The next token as a finite number.
     pub fn number(&mut self, field: &str) -> Result<f64, ParseError> {
-        let Some(tok) = self.tokens.get(self.pos).copied() else {
-            return Err(parse_error(
-                self.file,
-                Some(self.last_line),
-                field,
-                "file ends here (truncated?): expected a number",
-            ));
-        };
-        self.pos += 1;
-        parse_number(self.file, tok, field, false)
+        let tok = self.next_or_truncated(field)?;
+        parse_number_quoting(self.file, tok, field, false, self.quote)
     }
 
     /// The next token as a finite number; a comma is accepted as the decimal separator.
     pub fn number_comma_decimal(&mut self, field: &str) -> Result<f64, ParseError> {
-        let Some(tok) = self.tokens.get(self.pos).copied() else {
-            return Err(parse_error(
-                self.file,
-                Some(self.last_line),
-                field,
-                "file ends here (truncated?): expected a number",
-            ));
-        };
-        self.pos += 1;
-        parse_number(self.file, tok, field, true)
+        let tok = self.next_or_truncated(field)?;
+        parse_number_quoting(self.file, tok, field, true, self.quote)
     }
 
     /// The next token as a whole number within `min..=max`.
@@ -136,7 +226,7 @@ impl<'a> Tokens<'a> {
     pub fn numbers(&mut self, n: usize, field: &str) -> Result<Vec<f64>, ParseError> {
         // `n` comes from the file: reserve no more than the tokens left, so a huge declared count
         // in a short file fails with "truncated" instead of allocating gigabytes first.
-        let mut out = Vec::with_capacity(n.min(self.remaining()));
+        let mut out = Vec::with_capacity(n.min(self.upper_bound()));
         for i in 0..n {
             let v = self.number(field).map_err(|mut e| {
                 e.message = format!("{} (value {} of {n})", e.message, i + 1);
@@ -150,6 +240,17 @@ impl<'a> Tokens<'a> {
 
 /// Parses one token as a finite number.
 pub fn parse_number(file: &str, tok: Token<'_>, field: &str, comma_decimal: bool) -> Result<f64, ParseError> {
+    parse_number_quoting(file, tok, field, comma_decimal, true)
+}
+
+/// [`parse_number`]; the error quotes the token only if `quote`.
+fn parse_number_quoting(
+    file: &str,
+    tok: Token<'_>,
+    field: &str,
+    comma_decimal: bool,
+    quote: bool,
+) -> Result<f64, ParseError> {
     let owned;
     let text = if comma_decimal && tok.text.contains(',') {
         owned = tok.text.replace(',', ".");
@@ -168,7 +269,11 @@ pub fn parse_number(file: &str, tok: Token<'_>, field: &str, comma_decimal: bool
             file,
             Some(tok.line),
             field,
-            format!("expected a finite number, found `{}`", shorten(tok.text)),
+            if quote {
+                format!("expected a finite number, found `{}`", shorten(tok.text))
+            } else {
+                "expected a finite number, found something else".to_string()
+            },
         )),
     }
 }
@@ -206,14 +311,13 @@ mod tests {
 
     #[test]
     fn latin1_bytes_decode() {
-        assert_eq!(decode(b"90\xb0 M\xfcller"), "90° Müller");
-        assert_eq!(decode("90° Müller".as_bytes()), "90° Müller");
+        assert_eq!(decode(b"90\xb0 M\xfcller".to_vec()), "90° Müller");
+        assert_eq!(decode("\u{feff}90° Müller".as_bytes().to_vec()), "90° Müller");
     }
 
     #[test]
     fn tokens_span_and_share_lines_with_commas() {
-        let ls = ["1, 2,3", "", "4\t5  6,"];
-        let mut t = Tokens::new("f", &ls, 10, true);
+        let mut t = Tokens::new("f", "1, 2,3\r\n\r4\t5  6,", 10, true);
         assert_eq!(t.numbers(6, "x").unwrap(), vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
         let e = t.number("x").unwrap_err();
         assert!(e.message.contains("truncated"), "{e}");
@@ -223,24 +327,31 @@ mod tests {
     #[test]
     fn nan_and_inf_are_rejected() {
         for bad in ["nan", "NaN", "inf", "-infinity", "1e999", "abc", "1.2.3"] {
-            let ls = [bad];
-            let mut t = Tokens::new("f", &ls, 1, true);
+            let mut t = Tokens::new("f", bad, 1, true);
             assert!(t.number("x").is_err(), "{bad} accepted");
         }
     }
 
     #[test]
     fn huge_declared_count_does_not_allocate() {
-        let ls = ["1 2 3"];
-        let mut t = Tokens::new("f", &ls, 1, true);
+        let mut t = Tokens::new("f", "1 2 3", 1, true);
         let e = t.numbers(usize::MAX, "candela values").unwrap_err();
         assert!(e.field == "candela values" && e.message.contains("truncated"), "{e}");
     }
 
     #[test]
+    fn tokens_of_another_file_are_never_quoted() {
+        let mut t = Tokens::new("f", "root:x:0:0", 1, true).without_quotes();
+        let e = t.number("x").unwrap_err();
+        assert!(!e.message.contains("root"), "{e}");
+        let mut t = Tokens::new("f", "1 2 3 \u{1a}", 1, true);
+        t.number("x").unwrap();
+        assert_eq!(t.count_rest(), 2);
+    }
+
+    #[test]
     fn comma_decimal_for_eulumdat() {
-        let ls = ["12,5"];
-        let mut t = Tokens::new("f", &ls, 1, false);
+        let mut t = Tokens::new("f", "12,5", 1, false);
         assert_eq!(t.number_comma_decimal("x").unwrap(), 12.5);
     }
 }

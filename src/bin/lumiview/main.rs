@@ -2,6 +2,7 @@
 //! tables, photometric solids and polar plots. A thin layer over the library.
 
 mod commands;
+mod interrupt;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -134,6 +135,7 @@ fn quiet_vulkan_layers() {
 }
 
 fn main() -> ExitCode {
+    interrupt::install();
     quiet_vulkan_layers();
     let cli = Cli::parse();
     let result = match cli.command {

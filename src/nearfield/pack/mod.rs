@@ -26,6 +26,10 @@ pub use reader::{OpenOptions, Pack, PageBytes, VerifyReport};
 pub use tiles::{TileBox, TileMode, EMPTY_TILE, MAX_RELATIVE_ERROR};
 pub use writer::write_pack;
 
+/// The file-name extension of a pack (a file named so is read as a pack or refused, never as
+/// anything else).
+pub const EXTENSION: &str = "lvpack";
+
 use super::error::{NearfieldError, Result};
 
 /// Which tiles are kept: a tile is kept when any of its values is above the threshold.

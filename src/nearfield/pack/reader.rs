@@ -70,6 +70,8 @@ pub struct VerifyReport {
     pub pages: usize,
     /// Bytes read: pages and padding.
     pub bytes: u64,
+    /// Tiles decoded, every value finite and ≥ 0 cd/m².
+    pub tiles: u64,
 }
 
 /// Where the bytes come from.
@@ -125,6 +127,9 @@ fn read_exact_at(_: &File, _: &mut [u8], _: u64) -> std::io::Result<()> {
 /// Pages read so far.
 struct PageCache {
     pages: Vec<Option<(PageBytes, u64)>>,
+    /// Pages found damaged (the error's message): a damaged page is read and checked once, then
+    /// every later use fails at once (a render asks for its tiles thousands of times).
+    bad: Vec<Option<String>>,
     bytes: u64,
     tick: u64,
 }
@@ -171,8 +176,8 @@ impl Pack {
 
     /// [`Pack::open`] with options (eager page verification, cache size).
     pub fn open_with(path: &Path, opts: &OpenOptions) -> Result<Pack> {
-        let file = File::open(path).map_err(|e| NearfieldError::io(path, e))?;
-        let len = file.metadata().map_err(|e| NearfieldError::io(path, e))?.len();
+        let (file, len) =
+            crate::files::open_regular(path, u64::MAX, "a .lvpack").map_err(|e| NearfieldError::io(path, e))?;
         Self::load(path.to_path_buf(), Backing::File(file), len, opts)
     }
 
@@ -509,6 +514,7 @@ impl Pack {
             dir_offset: header.dir_offset,
             cache: Mutex::new(PageCache {
                 pages: vec![None; pages.len()],
+                bad: vec![None; pages.len()],
                 bytes: 0,
                 tick: 0,
             }),
@@ -634,6 +640,9 @@ impl Pack {
                 *used = tick;
                 return Ok(p.clone());
             }
+            if let Some(Some(m)) = c.bad.get(index) {
+                return Err(self.corrupt(&sec.name, m.clone()));
+            }
         }
         // Read outside the lock so other threads keep sampling cached pages.
         let mut buf = vec![0u8; sec.length as usize];
@@ -642,10 +651,17 @@ impl Pack {
             .map_err(|e| NearfieldError::io(&self.path, e))?;
         let crc = crc32fast::hash(&buf);
         if crc != sec.crc32 {
-            return Err(self.corrupt(
-                &sec.name,
-                format!("checksum mismatch (stored {:08x}, computed {crc:08x})", sec.crc32),
-            ));
+            let m = format!("checksum mismatch (stored {:08x}, computed {crc:08x})", sec.crc32);
+            if let Some(slot) = self
+                .cache
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner)
+                .bad
+                .get_mut(index)
+            {
+                *slot = Some(m.clone());
+            }
+            return Err(self.corrupt(&sec.name, m));
         }
         let page = PageBytes(Arc::new(buf));
         let mut c = self.cache.lock().unwrap_or_else(PoisonError::into_inner);
@@ -677,8 +693,11 @@ impl Pack {
         Ok(page)
     }
 
-    /// Reads every page and checks its CRC32, and checks that all bytes between sections are zero,
-    /// so any changed byte of the file is found. Errors name the page or `padding`.
+    /// Reads every page and checks its CRC32, checks that all bytes between sections are zero, so
+    /// any changed byte of the file is found, and decodes every tile the tile tables point at,
+    /// checking that each value is a finite luminance ≥ 0 (a pack written with valid checksums
+    /// around NaN, infinite or negative values is refused too). Errors name the page (and slot) or
+    /// `padding`.
     pub fn verify(&self) -> Result<VerifyReport> {
         let mut bytes = 0u64;
         let mut buf = vec![0u8; 8 << 20];
@@ -728,9 +747,18 @@ impl Pack {
                 bytes += k as u64;
             }
         }
+        let mut tiles = 0u64;
+        let mut values = vec![0f32; (self.layout.tile_size * self.layout.tile_size) as usize];
+        for &g in &self.tables {
+            if g != EMPTY_TILE {
+                self.decode_slot(g, &mut values)?;
+                tiles += 1;
+            }
+        }
         Ok(VerifyReport {
             pages: self.pages.len(),
             bytes,
+            tiles,
         })
     }
 
@@ -860,5 +888,8 @@ impl Pack {
 impl ImageSource for Pack {
     fn image(&self, index: usize) -> Result<LuminanceImage> {
         self.decode_image(index)
+    }
+    fn input_files(&self) -> Vec<PathBuf> {
+        vec![self.path.clone()]
     }
 }

@@ -5,8 +5,10 @@
 //! order and writes them as they come, so at most three chunks (one being encoded, one queued, one
 //! being written) are held at a time. Tile tables go to a spill file next to the output and are
 //! copied into the pack at the end; the per-image records (40 bytes each, like the cameras the
-//! scan already holds) stay in memory. The pack is written as `NAME.partial` and renamed when
-//! complete, so a failed run never leaves a file that looks finished.
+//! scan already holds) stay in memory. The pack is written under a unique temporary name beside it
+//! ([`crate::files::TempOutput`]) and renamed when complete, so a failed, killed or concurrent run
+//! never leaves a file that looks finished; an output that is one of the scan's input files is
+//! refused.
 
 use std::fs::File;
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
@@ -67,28 +69,24 @@ pub fn write_pack(
     let name = path
         .file_name()
         .ok_or_else(|| NearfieldError::invalid("output", format!("{} has no file name", path.display())))?;
-    let sibling = |suffix: &str| {
-        let mut s = name.to_os_string();
-        s.push(suffix);
-        path.with_file_name(s)
+    // Never replace what is being read (a pack repacked onto itself, an image of the scan).
+    crate::files::ensure_not_input(path, scan.source.input_files().iter().map(PathBuf::as_path))
+        .map_err(|m| NearfieldError::invalid("output", m))?;
+    let mut tables_name = name.to_os_string();
+    tables_name.push(".tables");
+    // Unique temporary files beside the output (two writers of one output never share one; a
+    // killed writer's are removed by the next), removed on error, the pack renamed into place.
+    let create = |target: &Path| {
+        let (mut t, _stale) = crate::files::TempOutput::create(target).map_err(|e| NearfieldError::io(target, e))?;
+        let file = t
+            .take_file()
+            .ok_or_else(|| NearfieldError::invalid("output", "temporary file not open"))?;
+        Ok::<_, NearfieldError>((t, file))
     };
-    let mut cleanup = Cleanup {
-        paths: vec![sibling(".partial"), sibling(".tables.partial")],
-        armed: true,
-    };
-    let partial = cleanup.paths[0].clone();
-    let spill_path = cleanup.paths[1].clone();
-    let create = |p: &PathBuf| {
-        std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(p)
-            .map_err(|e| NearfieldError::io(p, e))
-    };
-    let file = create(&partial)?;
-    let spill = create(&spill_path)?;
+    let (pack_temp, file) = create(path)?;
+    let (spill_temp, spill) = create(&path.with_file_name(tables_name))?;
+    let partial = pack_temp.path().to_path_buf();
+    let spill_path = spill_temp.path().to_path_buf();
     let mut pool = PoolWriter {
         out: BufWriter::with_capacity(4 << 20, file),
         path: partial.clone(),
@@ -176,28 +174,12 @@ pub fn write_pack(
     });
     let pool = pool?;
     encode_result?;
-    let mut stats = pool.finish(scan, opts, path)?;
-    cleanup.armed = false;
+    let mut stats = pool.finish(scan, opts)?;
+    drop(spill_temp);
+    pack_temp.commit().map_err(|e| NearfieldError::io(path, e))?;
     stats.peak_pending_bytes = peak_bytes.load(Ordering::Relaxed);
     stats.peak_pending_images = peak_images.load(Ordering::Relaxed);
     Ok(stats)
-}
-
-/// Removes the partial files unless disarmed (on success the pack was renamed and the spill
-/// removed already).
-struct Cleanup {
-    paths: Vec<PathBuf>,
-    armed: bool,
-}
-
-impl Drop for Cleanup {
-    fn drop(&mut self) {
-        if self.armed {
-            for p in &self.paths {
-                let _ = std::fs::remove_file(p);
-            }
-        }
-    }
 }
 
 /// Tile-table entries on their way to the spill file.
@@ -402,9 +384,9 @@ impl PoolWriter {
         self.write(bytes)
     }
 
-    /// Writes the small sections, copies the tile tables in, writes the directory and the header,
-    /// and renames the file into place.
-    fn finish(mut self, scan: &Scan, opts: &PackOptions, path: &Path) -> Result<PackStats> {
+    /// Writes the small sections, copies the tile tables in, writes the directory and the header
+    /// (the caller renames the file into place).
+    fn finish(mut self, scan: &Scan, opts: &PackOptions) -> Result<PackStats> {
         self.close_page();
         let pages: Vec<SectionInfo> = self.sections.clone();
         let pool_bytes: u64 = pages.iter().map(|p| p.length).sum();
@@ -539,7 +521,7 @@ impl PoolWriter {
             crc32,
         });
         drop(spill);
-        let _ = std::fs::remove_file(&spill_path);
+        // The spill file is removed with its temporary name by the caller.
 
         // Directory, then the header at offset 0.
         let pad = self.pos.next_multiple_of(8) - self.pos;
@@ -570,7 +552,6 @@ impl PoolWriter {
         // crash is never mistaken for a good one (the header states the length, every section has a
         // checksum). A caller that needs durability syncs the file itself.
         drop(file);
-        std::fs::rename(&self.path, path).map_err(|e| NearfieldError::io(path, e))?;
 
         let c = &self.counts;
         Ok(PackStats {

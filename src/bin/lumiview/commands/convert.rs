@@ -69,23 +69,24 @@ fn convert_one(p: &Photometry, target: Target, out: &Path) -> Result<Converted, 
     })
 }
 
-/// Writes `text` to `out` through a temporary file beside it, so a failed write leaves no
-/// half-written file; refuses to replace the input it was made from.
+/// Writes `text` to `out` through a uniquely named temporary file beside it
+/// ([`lumiview::files::TempOutput`]), so a failed or interrupted write leaves no half-written file;
+/// refuses to replace the input it was made from.
 fn write_output(input: &Path, out: &Path, text: &str) -> Result<(), String> {
-    if let (Ok(a), Ok(b)) = (std::fs::canonicalize(input), std::fs::canonicalize(out)) {
-        if a == b {
-            return Err(format!(
-                "{}: the output is the input file itself; choose another output name",
-                out.display()
-            ));
-        }
+    use std::io::Write as _;
+    if lumiview::files::same_file(input, out) {
+        return Err(format!(
+            "{}: the output is the input file itself; choose another output name",
+            out.display()
+        ));
     }
-    let tmp = out.with_extension(format!("lumiview-{}.partial", std::process::id()));
-    std::fs::write(&tmp, text).map_err(|e| format!("{}: cannot write: {e}", tmp.display()))?;
-    std::fs::rename(&tmp, out).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: cannot write: {e}", out.display())
-    })
+    let (mut tmp, _) =
+        lumiview::files::TempOutput::create(out).map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+    let cannot = |e: std::io::Error| format!("{}: cannot write: {e}", out.display());
+    if let Some(f) = tmp.file() {
+        f.write_all(text.as_bytes()).map_err(cannot)?;
+    }
+    tmp.commit().map_err(cannot)
 }
 
 /// `lumiview convert`.

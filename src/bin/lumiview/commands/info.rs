@@ -25,7 +25,7 @@ pub fn info(files: &[PathBuf], as_json: bool, verify: bool, args: &LoadArgs) -> 
 }
 
 fn info_one(file: &Path, as_json: bool, verify: bool, args: &LoadArgs) -> CliResult {
-    let kind = detect_kind(file);
+    let kind = detect_kind(file)?;
     if verify && !matches!(kind, FileKind::Pack) {
         return Err(format!("{}: --verify applies to .lvpack files", file.display()).into());
     }

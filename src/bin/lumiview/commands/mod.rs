@@ -65,13 +65,16 @@ enum FileKind {
 
 /// Detects the kind of a file by its first bytes (`nearfield::scanfile`: "TM25", "LVPACK"), else
 /// photometry (whose reader reports an unreadable file).
-fn detect_kind(file: &Path) -> FileKind {
+///
+/// Errors: a path that is not a regular file, or a `.lvpack` without the pack's magic (empty or
+/// half-written), naming the file: it is never handed to the photometry reader.
+fn detect_kind(file: &Path) -> Result<FileKind, lumiview::nearfield::NearfieldError> {
     use lumiview::nearfield::scanfile::{detect, ScanFileKind};
-    match detect(file) {
-        Ok(Some(ScanFileKind::RayFile)) => FileKind::RayFile,
-        Ok(Some(ScanFileKind::Pack)) => FileKind::Pack,
+    Ok(match detect(file)? {
+        Some(ScanFileKind::RayFile) => FileKind::RayFile,
+        Some(ScanFileKind::Pack) => FileKind::Pack,
         _ => FileKind::Photometry,
-    }
+    })
 }
 
 /// Parses a camera layout: `rigo:N` (N cameras per hemisphere, 2° overlap, 0.05° jitter),

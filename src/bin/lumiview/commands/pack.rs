@@ -171,6 +171,12 @@ pub fn pack(args: &PackArgs) -> CliResult {
         return Err(format!("--page-mib {}: must be within 1…128", args.page_mib).into());
     }
     let threshold = Threshold::parse(&args.threshold)?;
+    // Never replace an input: the manifests, ray file or pack given, the proxy mesh (a manifest's
+    // images and a pack's own file are checked by write_pack).
+    lumiview::files::ensure_not_input(
+        &args.output,
+        args.input.iter().chain(args.proxy.iter()).map(PathBuf::as_path),
+    )?;
     let (scan, source, proxy) = input_scan(args)?;
     let proxy = match &args.proxy {
         Some(path) => Some(PackProxy {
@@ -311,7 +317,7 @@ pub fn info_pack(file: &Path, as_json: bool, verify: bool) -> CliResult {
             "sections": pack.sections().iter().map(|s| json!({
                 "name": s.name, "offset": s.offset, "length": s.length, "crc32": format!("{:08x}", s.crc32),
             })).collect::<Vec<_>>(),
-            "verify": report.map(|r| json!({"ok": true, "pages": r.pages, "bytes": r.bytes})),
+            "verify": report.map(|r| json!({"ok": true, "pages": r.pages, "bytes": r.bytes, "tiles": r.tiles})),
         });
         outln!(out, "{}", serde_json::to_string_pretty(&v)?);
         return print_report(&out);
@@ -419,9 +425,10 @@ pub fn info_pack(file: &Path, as_json: bool, verify: bool) -> CliResult {
     if let Some(r) = report {
         outln!(
             out,
-            "verify            ok: {} pages and all padding, {} checked",
+            "verify            ok: {} pages and all padding, {} checked; {} tiles decoded, every value finite and ≥ 0",
             r.pages,
-            mib(r.bytes)
+            mib(r.bytes),
+            r.tiles
         );
     }
     print_report(&out)

@@ -183,6 +183,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
         Some("exr") => true,
         _ => return Err(format!("{}: the output must end in .png or .exr", a.output.display()).into()),
     };
+    lumiview::files::ensure_not_input(&a.output, [a.file.as_path()])?;
     if a.legend && w < 160 {
         return Err(format!("--legend needs a still at least 160 px wide (--size {})", a.size).into());
     }
