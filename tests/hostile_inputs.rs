@@ -578,3 +578,65 @@ fn f10_verify_checks_the_values_not_only_the_checksums() {
     }
     std::fs::remove_dir_all(&d).ok();
 }
+
+/// The committed fuzz seeds and regression inputs (`tests/data/fuzz/README.md`) give what they
+/// should, through the command line.
+#[test]
+fn fuzz_seeds_and_regression_inputs() {
+    let d = dir("seeds");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/fuzz");
+    let out = d.join("out.lvpack");
+    for (file, args, ok, want) in [
+        ("disc-v1.lvpack", &["info", "--verify"][..], true, "every value finite"),
+        (
+            "disc-v2-proxy.lvpack",
+            &["info", "--verify"][..],
+            true,
+            "every value finite",
+        ),
+        (
+            "dots-tile4.lvpack",
+            &["info", "--verify"][..],
+            true,
+            "every value finite",
+        ),
+        ("zero-header.lvpack", &["info"][..], false, "the header is zero"),
+        (
+            "nan-tile.lvpack",
+            &["info", "--verify"][..],
+            false,
+            "tile value 0 decodes to NaN",
+        ),
+        (
+            "negative-tile.lvpack",
+            &["info", "--verify"][..],
+            false,
+            "tile value 0 decodes to -0.5",
+        ),
+        (
+            "no-rays.tm25ray",
+            &["pack", "--quiet", "-o", s(&out)][..],
+            false,
+            "no ray",
+        ),
+        (
+            "outlier-ray.tm25ray",
+            &["pack", "--quiet", "-o", s(&out)][..],
+            true,
+            "left out as outliers",
+        ),
+        ("tilt-passwd.ies", &["info"][..], false, "cannot be read"),
+        ("subnormal.ies", &["info"][..], true, "emits no light"),
+    ] {
+        let path = data.join(file);
+        let mut a = vec![args[0]];
+        a.push(s(&path));
+        a.extend_from_slice(&args[1..]);
+        let (o, _) = lumiview_within(&a, Duration::from_secs(60));
+        let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), stderr(&o));
+        assert_eq!(o.status.success(), ok, "{file}: {text}");
+        assert!(text.contains(want), "{file}: {text}");
+        assert!(!text.contains("root:"), "{file}: {text}");
+    }
+    std::fs::remove_dir_all(&d).ok();
+}
