@@ -318,7 +318,17 @@ impl Pack {
                 format!("{} bytes is not a whole number of u32 entries", ts.length),
             ));
         }
-        let mut tables: Vec<u32> = Vec::with_capacity((ts.length / 4) as usize);
+        // Hundreds of MiB for a full scan: a failed allocation is an error, not an abort.
+        let mut tables: Vec<u32> = Vec::new();
+        tables.try_reserve_exact((ts.length / 4) as usize).map_err(|_| {
+            NearfieldError::io(
+                &path,
+                std::io::Error::new(
+                    std::io::ErrorKind::OutOfMemory,
+                    format!("cannot allocate {} bytes for the tile tables", ts.length),
+                ),
+            )
+        })?;
         let mut crc = crc32fast::Hasher::new();
         let mut at = 0u64;
         while at < ts.length {
