@@ -4,16 +4,17 @@
 //!   device such as `/dev/zero`, a socket or a directory is refused before it is opened, so nothing
 //!   blocks or reads forever), and a reader's size limit is checked before anything is allocated.
 //!   A buffer that cannot be allocated is an [`std::io::ErrorKind::OutOfMemory`] error, never an
-//!   abort.
+//!   abort. Messages do not repeat the path: callers name the file.
 //! - **Writing** ([`TempOutput`]): an output is written under a unique temporary name beside it
-//!   (`NAME.lumiview-PID-NONCE.partial`) and renamed into place when complete, so a failed, killed
+//!   (`NAME.lumiview-PID-UNIQUE.partial`) and renamed into place when complete, so a failed, killed
 //!   or concurrent run never leaves a half-written file under the output's name and two writers of
-//!   one output never mix their bytes (the last complete one wins). The temporary file is removed
-//!   when the writer fails or is dropped, and when the process is interrupted: a program that
-//!   handles SIGINT/SIGTERM calls [`remove_temporaries`] (the `lumiview` CLI does). Temporary files
-//!   of the same output left by a run that was killed outright (SIGKILL, power loss) are removed by
-//!   the next writer of that output once their process is gone ([`TempOutput::create`] reports
-//!   them).
+//!   one output never mix their bytes (the last complete one wins). The writer holds an exclusive
+//!   lock on its temporary file until it is renamed or removed. It is removed when the writer fails
+//!   or is dropped, and when the process is interrupted: a program that handles SIGINT/SIGTERM calls
+//!   [`remove_temporaries`] (the `lumiview` CLI does). Temporary files of the same output left by a
+//!   run that was killed outright (SIGKILL, power loss) hold no lock any more; the next writer of
+//!   that output removes them ([`TempOutput::create`] returns their names). A file still locked
+//!   (another live writer, in any process, container or host sharing the folder) is never touched.
 //! - **Inputs are never replaced** ([`ensure_not_input`]): an output that is the same file as an
 //!   input (or a file an input refers to: a manifest's images) is an error before anything is
 //!   written.
@@ -29,7 +30,7 @@ fn refused(message: String) -> std::io::Error {
     std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
 }
 
-/// What a non-regular file is, for messages.
+/// What a non-regular file is, for messages ("a FIFO (named pipe)").
 fn kind_name(meta: &std::fs::Metadata) -> &'static str {
     let t = meta.file_type();
     if t.is_dir() {
@@ -60,11 +61,7 @@ pub fn open_regular(path: &Path, max_bytes: u64, what: &str) -> std::io::Result<
     // Metadata first: opening a FIFO blocks until someone writes to it.
     let meta = std::fs::metadata(path)?;
     if !meta.is_file() {
-        return Err(refused(format!(
-            "{} is {}, not a regular file; refused",
-            path.display(),
-            kind_name(&meta)
-        )));
+        return Err(refused(format!("{}, not a regular file; refused", kind_name(&meta))));
     }
     if meta.len() > max_bytes {
         return Err(refused(format!(
@@ -96,14 +93,13 @@ pub fn read_regular(path: &Path, max_bytes: u64, what: &str) -> std::io::Result<
     bytes.try_reserve_exact(len as usize).map_err(|_| {
         std::io::Error::new(
             std::io::ErrorKind::OutOfMemory,
-            format!("cannot allocate {len} bytes to read {}", path.display()),
+            format!("cannot allocate the {len} bytes to read it"),
         )
     })?;
     file.take(max_bytes.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > max_bytes {
         return Err(refused(format!(
-            "{} grew past the {max_bytes} bytes {what} may have while it was read",
-            path.display()
+            "the file grew past the {max_bytes} bytes {what} may have while it was read"
         )));
     }
     Ok(bytes)
@@ -156,12 +152,16 @@ pub fn ensure_not_input<'a>(output: &Path, inputs: impl IntoIterator<Item = &'a 
 /// Temporary files of this process not yet renamed or removed (for [`remove_temporaries`]).
 static LIVE: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes every temporary file a [`TempOutput`] of this process holds (call it when the process
-/// is interrupted, before exiting: the `lumiview` CLI does on SIGINT and SIGTERM). Returns how
-/// many were removed.
+/// Removes every temporary file a [`TempOutput`] of this process holds and keeps the registry
+/// locked from then on, so no thread of the process registers (and so creates) another one: call
+/// it when the process is interrupted, just before it ends (the `lumiview` CLI does on SIGINT and
+/// SIGTERM). Returns how many were removed.
 pub fn remove_temporaries() -> usize {
     let live = LIVE.lock().unwrap_or_else(PoisonError::into_inner);
-    live.iter().filter(|p| std::fs::remove_file(p).is_ok()).count()
+    let n = live.iter().filter(|p| std::fs::remove_file(p).is_ok()).count();
+    // Held until the process ends: a writer that tries to create a temporary file now waits.
+    std::mem::forget(live);
+    n
 }
 
 fn register(p: &Path) {
@@ -179,32 +179,23 @@ const TEMP_MARK: &str = ".lumiview-";
 /// A temporary file's suffix.
 const TEMP_SUFFIX: &str = ".partial";
 
-/// Whether process `pid` is gone (`None` where this system cannot tell).
-fn process_gone(pid: u32) -> Option<bool> {
-    if pid == std::process::id() {
-        return Some(false);
-    }
-    let proc = Path::new("/proc");
-    if proc.join("self").exists() {
-        Some(!proc.join(pid.to_string()).exists())
-    } else {
-        None
-    }
-}
-
-/// An output being written: a uniquely named temporary file beside it, renamed into place by
-/// [`TempOutput::commit`], removed if dropped before that.
+/// An output being written: a uniquely named temporary file beside it, locked while it exists,
+/// renamed into place by [`TempOutput::commit`], removed if dropped before that.
 #[derive(Debug)]
 pub struct TempOutput {
     target: PathBuf,
     temp: PathBuf,
     file: Option<File>,
+    /// A second handle of the same open file, holding the exclusive lock until the file is
+    /// renamed or removed (the writer may close its handle before that).
+    lock: Option<File>,
 }
 
 impl TempOutput {
-    /// Creates the temporary file for `target` (`TARGET.lumiview-PID-NONCE.partial`, created new,
-    /// never an existing file). First removes the temporary files of `target` left by processes
-    /// that are gone, and returns their names (a caller may report them) with the new output.
+    /// Creates the temporary file for `target` (`TARGET.lumiview-PID-UNIQUE.partial`, created
+    /// new, never an existing file) and locks it. First removes the temporary files of `target`
+    /// that no writer holds any more (left by a killed run), and returns their names (a caller may
+    /// report them) with the new output.
     ///
     /// Errors: `target` without a file name; the file cannot be created.
     pub fn create(target: &Path) -> std::io::Result<(TempOutput, Vec<PathBuf>)> {
@@ -222,26 +213,37 @@ impl TempOutput {
         loop {
             let n = NONCE.fetch_add(1, Ordering::Relaxed);
             let temp = target.with_file_name(format!("{name}{TEMP_MARK}{pid}-{clock:08x}{n}{TEMP_SUFFIX}"));
-            match std::fs::OpenOptions::new()
+            // Registered before it exists: an interrupt between the two still removes it.
+            register(&temp);
+            let opened = std::fs::OpenOptions::new()
                 .read(true)
                 .write(true)
                 .create_new(true)
-                .open(&temp)
-            {
-                Ok(file) => {
-                    register(&temp);
-                    return Ok((
-                        TempOutput {
-                            target: target.to_path_buf(),
-                            temp,
-                            file: Some(file),
-                        },
-                        stale,
-                    ));
+                .open(&temp);
+            let file = match opened {
+                Ok(f) => f,
+                Err(e) => {
+                    unregister(&temp);
+                    if e.kind() == std::io::ErrorKind::AlreadyExists {
+                        continue;
+                    }
+                    return Err(e);
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
-                Err(e) => return Err(e),
-            }
+            };
+            // Owned from here: an error below removes the file again.
+            let mut out = TempOutput {
+                target: target.to_path_buf(),
+                temp,
+                lock: None,
+                file: None,
+            };
+            // A file system without locks (some network mounts) still gets its temporary file:
+            // only the removal of stale files relies on the lock.
+            let lock = file.try_clone()?;
+            let _ = lock.try_lock();
+            out.file = Some(file);
+            out.lock = Some(lock);
+            return Ok((out, stale));
         }
     }
 
@@ -260,7 +262,8 @@ impl TempOutput {
         self.file.as_mut()
     }
 
-    /// Takes the open file (the caller writes and closes it; the name stays owned by `self`).
+    /// Takes the open file (the caller writes and closes it; the name and the lock stay with
+    /// `self`).
     pub fn take_file(&mut self) -> Option<File> {
         self.file.take()
     }
@@ -283,14 +286,25 @@ impl TempOutput {
 impl Drop for TempOutput {
     fn drop(&mut self) {
         self.file.take();
-        if self.temp.exists() && LIVE.lock().unwrap_or_else(PoisonError::into_inner).contains(&self.temp) {
+        let live = LIVE.lock().unwrap_or_else(PoisonError::into_inner).contains(&self.temp);
+        if live {
             let _ = std::fs::remove_file(&self.temp);
+            unregister(&self.temp);
         }
-        unregister(&self.temp);
+        // The lock goes last: nobody may take the file for stale while it is still ours.
+        self.lock.take();
     }
 }
 
-/// Removes `TARGET.lumiview-PID-*.partial` files whose process is gone; returns their paths.
+/// Whether process `pid` is visibly alive (Linux: `/proc/PID` exists; `false` where this cannot
+/// be seen: another PID namespace, `hidepid`, no `/proc`).
+fn process_alive(pid: u32) -> bool {
+    pid == std::process::id() || Path::new("/proc").join(pid.to_string()).exists()
+}
+
+/// Removes `TARGET.lumiview-*.partial` files that no writer holds (their lock can be taken: the
+/// process that made them is gone); returns their paths. A file that cannot be opened or locked is
+/// left alone.
 fn remove_stale(target: &Path, name: &str) -> Vec<PathBuf> {
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -304,14 +318,24 @@ fn remove_stale(target: &Path, name: &str) -> Vec<PathBuf> {
     for e in entries.flatten() {
         let file_name = e.file_name();
         let Some(f) = file_name.to_str() else { continue };
-        let Some(rest) = f.strip_prefix(&prefix).and_then(|r| r.strip_suffix(TEMP_SUFFIX)) else {
+        if !(f.starts_with(&prefix) && f.ends_with(TEMP_SUFFIX)) {
+            continue;
+        }
+        let path = e.path();
+        if LIVE.lock().unwrap_or_else(PoisonError::into_inner).contains(&path) {
+            continue; // this process's own
+        }
+        // A writer's process that is visibly alive keeps its file even before it has locked it
+        // (the moment between creating and locking); otherwise the lock decides.
+        let pid = f[prefix.len()..].split('-').next().and_then(|p| p.parse::<u32>().ok());
+        if pid.is_some_and(process_alive) {
+            continue;
+        }
+        let Ok(file) = std::fs::File::open(&path) else {
             continue;
         };
-        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
-            continue;
-        };
-        if process_gone(pid) == Some(true) && std::fs::remove_file(e.path()).is_ok() {
-            removed.push(e.path());
+        if file.try_lock().is_ok() && std::fs::remove_file(&path).is_ok() {
+            removed.push(path);
         }
     }
     removed
@@ -340,7 +364,7 @@ mod tests {
             "{e}"
         );
         let e = read_regular(&d, 100, "a test file").unwrap_err();
-        assert!(e.to_string().contains("a directory"), "{e}");
+        assert!(e.to_string().contains("a directory, not a regular file"), "{e}");
     }
 
     #[cfg(target_os = "linux")]
@@ -369,15 +393,21 @@ mod tests {
         b.commit().unwrap();
         a.commit().unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"a");
-        // A process id that cannot be alive (beyond Linux's pid_max).
+        // A left-over file nobody holds is removed; one that is locked (a live writer) is not.
         let stale = d.join(format!("out.bin{TEMP_MARK}4294967295-1{TEMP_SUFFIX}"));
         std::fs::write(&stale, b"x").unwrap();
+        let held = d.join(format!("out.bin{TEMP_MARK}4294967294-1{TEMP_SUFFIX}"));
+        std::fs::write(&held, b"x").unwrap();
+        let holder = std::fs::File::open(&held).unwrap();
+        holder.lock().unwrap();
         let (t, removed) = TempOutput::create(&target).unwrap();
-        if cfg!(target_os = "linux") {
-            assert_eq!(removed, vec![stale.clone()]);
-            assert!(!stale.exists());
-        }
-        drop(t);
+        assert_eq!(removed, vec![stale.clone()]);
+        assert!(!stale.exists() && held.exists());
+        // Our own live temporary file is not stale to a second writer in this process.
+        let (t2, removed) = TempOutput::create(&target).unwrap();
+        assert!(removed.is_empty() && t.path().exists());
+        drop((t, t2));
+        drop(holder);
     }
 
     #[test]

@@ -1,15 +1,19 @@
 //! Damaged and hostile inputs (issue 18): one test per finding of the hostile-input pass, numbered
-//! as in the issue. Each failed before its fix (the number in the name is the finding's):
+//! as in the issue:
 //!  1. one flipped byte in a pack page made `render` re-read the page for every tile (356 s);
 //!  2. photometric text files had no size bound (a 2 GiB IES aborted the process);
 //!  3. a half-written or empty `.lvpack` was read as EULUMDAT;
 //!  4. `pack` overwrote its own input;
 //!  5. two packs to one output shared `NAME.partial`; killed packs left their temporary files;
-//!  6. a ray file with 0 rays packed "successfully";
+//!  6. a ray file with 0 rays packed "successfully"; one outlier ray emptied every image;
 //!  7. a FIFO named `.ies`/`.json`/`.tm25ray` blocked forever, `/dev/zero` grew until memory ran out;
 //!  8. an error about `TILT=<file>` quoted that file's first line;
-//!  9. a 5e-324 cd file gave an exposure error (now: a plausibility warning, the render works);
+//!  9. a 5e-324 cd file gave an exposure error;
 //! 10. `info --verify` passed a pack with valid checksums around NaN / negative tile values.
+//!
+//! Run against the code before the issue-18 change, every test here failed except 6 (fixed with
+//! the ray-file work, 0757c46 and 18afca4) and the render half of 9 (the fixed default exposure
+//! of issue 15); 9 now also wants the "implausibly small" warning, which was new.
 //!
 //! GPU tests (1, 9): lavapipe in CI (a missing adapter fails there), skipped with a reason elsewhere.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -158,9 +162,9 @@ fn f01_a_flipped_byte_in_any_section_fails_render_at_once_naming_it() {
         );
         worst = worst.max(took);
     }
-    // Before the fix a damaged page took 356 s. The bound leaves room for a debug build on a
-    // software GPU; the figures with a release build are in the issue's note.
-    assert!(worst < Duration::from_secs(20), "slowest failure took {worst:?}");
+    // Before the fix a damaged page took 356 s. Measured here: at most 1.64 s per run (a debug
+    // build on lavapipe, GPU start included); the bound leaves room for a slower machine.
+    assert!(worst < Duration::from_secs(5), "slowest failure took {worst:?}");
     std::fs::remove_dir_all(&d).ok();
 }
 
@@ -506,7 +510,7 @@ fn f09_a_subnormal_intensity_is_a_warning_and_the_render_works() {
         let e = stderr(&o);
         assert!(o.status.success(), "{extra:?}: {e}");
         assert!(!e.contains("exposure"), "{e}");
-        assert!(e.contains("tiny.ies") && e.contains("emits no light"), "{e}");
+        assert!(e.contains("tiny.ies") && e.contains("is implausibly small"), "{e}");
     }
     let ies2 = d.join("small.ies");
     std::fs::write(&ies2, SMALL_IES.replace("100 80 0", "1e-300 1e-300 0")).unwrap();
@@ -626,7 +630,7 @@ fn fuzz_seeds_and_regression_inputs() {
             "left out as outliers",
         ),
         ("tilt-passwd.ies", &["info"][..], false, "cannot be read"),
-        ("subnormal.ies", &["info"][..], true, "emits no light"),
+        ("subnormal.ies", &["info"][..], true, "5e-324 cd is implausibly small"),
     ] {
         let path = data.join(file);
         let mut a = vec![args[0]];

@@ -361,7 +361,7 @@ fn mutations_never_panic() {
                 _ => rng.next_u64() as u8,
             };
         }
-        let cut = if rng.next_u64() % 5 == 0 {
+        let cut = if rng.next_u64().is_multiple_of(5) {
             (rng.next_u64() % b.len() as u64) as usize
         } else {
             b.len()

@@ -650,7 +650,7 @@ pub fn bin_rays(file: &RayFile, opts: &BinningOptions) -> Result<BinnedScan> {
         let mid = runs.len() / 2;
         let (_, m, _) = runs.select_nth_unstable(mid);
         let m = *m as f64;
-        if runs.len() % 2 == 0 {
+        if runs.len().is_multiple_of(2) {
             let lower = runs[..mid].iter().copied().max().unwrap_or(0) as f64;
             0.5 * (lower + m)
         } else {

@@ -81,7 +81,7 @@ impl ProxyBvh {
     /// Errors (argument `proxy`): no triangles, a count that is not a multiple of 3, more than
     /// [`MAX_TRIANGLES`], non-finite positions.
     pub fn build(vertices: &[[f32; 3]]) -> Result<Self> {
-        if vertices.is_empty() || vertices.len() % 3 != 0 {
+        if vertices.is_empty() || !vertices.len().is_multiple_of(3) {
             return Err(NearfieldError::invalid(
                 "proxy",
                 format!("{} vertices do not form a non-empty triangle list", vertices.len()),

@@ -710,10 +710,17 @@ pub fn decode_image(bytes: &[u8], path: &Path) -> Result<LuminanceImage> {
 /// here (see [`LuminanceImage::validate`]).
 pub fn read_image(path: &Path) -> Result<LuminanceImage> {
     let io = |e| NearfieldError::io(path, e);
-    let mut file = open_regular(path)?;
+    let file = open_regular(path)?;
     let len = file.metadata().map_err(io)?.len();
-    let mut bytes = Vec::with_capacity(len as usize);
-    file.read_to_end(&mut bytes).map_err(io)?;
+    // Up to MAX_FILE_BYTES (3 GiB): a failed allocation is an error, not an abort.
+    let mut bytes = Vec::new();
+    bytes.try_reserve_exact(len as usize).map_err(|_| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::OutOfMemory,
+            format!("cannot allocate the {len} bytes to read it"),
+        ))
+    })?;
+    file.take(MAX_FILE_BYTES).read_to_end(&mut bytes).map_err(io)?;
     decode_image(&bytes, path)
 }
 

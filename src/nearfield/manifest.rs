@@ -438,7 +438,8 @@ pub fn read_manifest(path: &Path) -> Result<Manifest> {
             format!("manifest is {len} bytes; at most {MAX_MANIFEST_BYTES} are read"),
         ));
     }
-    let bytes = std::fs::read(path).map_err(|e| NearfieldError::io(path, e))?;
+    let bytes = crate::files::read_regular(path, MAX_MANIFEST_BYTES, "a scan manifest")
+        .map_err(|e| NearfieldError::io(path, e))?;
     parse_manifest(&bytes, path)
 }
 

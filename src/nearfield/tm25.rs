@@ -1354,7 +1354,7 @@ pub fn encode(header: &Tm25Header, records: &[f32]) -> Result<Vec<u8>> {
             "Stokes and tristimulus columns have no agreed layout and are not written",
         ));
     }
-    if records.len() % items != 0 {
+    if !records.len().is_multiple_of(items) {
         return Err(NearfieldError::invalid(
             "TM-25 records",
             format!("{} values are not whole rays of {items} items", records.len()),

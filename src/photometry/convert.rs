@@ -477,9 +477,9 @@ pub fn to_ldt(p: &Photometry, file_name: &str) -> Result<Converted, PhotometryEr
     let mut c_all: Vec<f64> = p.web.c_angles().to_vec();
     c_all.pop();
     let mc_ok = |m: usize| match sym {
-        Symmetry::C0C180 => m % 2 == 0 && c_all.get(m / 2).is_some_and(|c| (c - 180.0).abs() < ANGLE_EPS),
+        Symmetry::C0C180 => m.is_multiple_of(2) && c_all.get(m / 2).is_some_and(|c| (c - 180.0).abs() < ANGLE_EPS),
         Symmetry::C90C270 | Symmetry::Quadrant => {
-            m % 4 == 0
+            m.is_multiple_of(4)
                 && c_all.get(m / 4).is_some_and(|c| (c - 90.0).abs() < ANGLE_EPS)
                 && c_all.get(3 * m / 4).is_some_and(|c| (c - 270.0).abs() < ANGLE_EPS)
         }

@@ -266,7 +266,7 @@ pub fn parse(text: &str, file: &str) -> Result<LdtFile, ParseError> {
         3 | 4 => 4,
         _ => 1,
     };
-    if symmetry > 1 && mc % needs_div != 0 {
+    if symmetry > 1 && !mc.is_multiple_of(needs_div) {
         return Err(parse_error(
             file,
             Some(mc_line),

@@ -7,7 +7,7 @@ use super::error::{parse_error, PhotometryError};
 use super::ies::{self, IesFile, IesVersion, TiltTable};
 use super::ldt::{self, LdtFile};
 use super::opening::{classify_ies, luminance, LuminousOpening, OpeningShape};
-use super::text::{decode, lines};
+use super::text::{decode, Lines};
 use super::web::{NativeGrid, PhotometricType, PhotometricWeb, Symmetry, ANGLE_EPS, MAX_INTENSITY_CD};
 
 /// Metres per foot.
@@ -224,15 +224,14 @@ pub fn load_from_text(text: &str, name: &str, opts: &LoadOptions) -> Result<Phot
 }
 
 fn looks_like_ies(text: &str) -> bool {
-    let ls = lines(text);
-    let first = ls
-        .first()
-        .map_or(String::new(), |l| l.trim_start().to_ascii_uppercase());
-    first.starts_with("IES")
-        || ls
-            .iter()
-            .take(200)
-            .any(|l| l.trim_start().to_ascii_uppercase().starts_with("TILT"))
+    // Only the first 200 lines, read one at a time (no line table for a file of short lines).
+    let starts = |l: &str, word: &str| {
+        l.trim_start()
+            .get(..word.len())
+            .is_some_and(|h| h.eq_ignore_ascii_case(word))
+    };
+    let mut ls = Lines::new(text).take(200);
+    ls.next().is_some_and(|l| starts(l, "IES")) || Lines::new(text).take(200).any(|l| starts(l, "TILT"))
 }
 
 /// Largest TILT file read, bytes.

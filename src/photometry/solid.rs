@@ -377,7 +377,7 @@ impl PhotometricSolid {
         while json_bytes.len() % 4 != 0 {
             json_bytes.push(b' ');
         }
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let total = 12 + 8 + json_bytes.len() + 8 + bin.len();

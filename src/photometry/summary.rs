@@ -390,7 +390,8 @@ pub fn plausibility_warnings(p: &Photometry) -> Vec<String> {
         }
     }
     let peak_cd = p.web.max_intensity().0;
-    if flux <= 0.0 || peak_cd <= 0.0 {
+    // A peak of 5e-324 cd integrates to 0 lm: that file is implausible, not dark.
+    if peak_cd <= 0.0 {
         w.push(format!("{name}: every intensity is zero: the file emits no light"));
     } else if peak_cd < MIN_PLAUSIBLE_PEAK_CD {
         w.push(format!(

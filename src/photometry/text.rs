@@ -83,6 +83,8 @@ pub struct Tokens<'a> {
     rest: &'a str,
     /// Line of the start of `rest` (1-based).
     line: usize,
+    /// Line of the start of the text.
+    first_line: usize,
     comma_is_delimiter: bool,
     /// Whether errors may quote a token (not for a referenced file that may be anything).
     quote: bool,
@@ -98,6 +100,7 @@ impl<'a> Tokens<'a> {
             file,
             rest: text,
             line: first_line,
+            first_line,
             comma_is_delimiter,
             quote: true,
             peeked: None,
@@ -119,24 +122,35 @@ impl<'a> Tokens<'a> {
     fn advance(&mut self) -> Option<Token<'a>> {
         let bytes = self.rest.as_bytes();
         let mut i = 0;
+        // Whether the last character skipped ended a line (at the end of the text that terminator
+        // does not start another line: the last line is the one it ends).
+        let mut after_terminator = false;
         while i < bytes.len() {
             match bytes[i] {
-                b'\n' => self.line += 1,
+                b'\n' => {
+                    self.line += 1;
+                    after_terminator = true;
+                }
                 b'\r' => {
                     if bytes.get(i + 1) != Some(&b'\n') {
                         self.line += 1;
                     }
+                    after_terminator = true;
                 }
                 _ => {
                     let c = self.rest[i..].chars().next().unwrap_or(' ');
                     if !self.is_delimiter(c) {
                         break;
                     }
+                    after_terminator = false;
                     i += c.len_utf8();
                     continue;
                 }
             }
             i += 1;
+        }
+        if i == bytes.len() && after_terminator && self.line > self.first_line {
+            self.line -= 1;
         }
         let rest = &self.rest[i..];
         let end = rest
@@ -337,6 +351,22 @@ mod tests {
         let mut t = Tokens::new("f", "1 2 3", 1, true);
         let e = t.numbers(usize::MAX, "candela values").unwrap_err();
         assert!(e.field == "candela values" && e.message.contains("truncated"), "{e}");
+    }
+
+    #[test]
+    fn truncation_names_the_last_line_whatever_ends_the_file() {
+        for (text, line) in [
+            ("1 2", 3),
+            ("1 2\n", 3),
+            ("1 2\r\n", 3),
+            ("1 2\r", 3),
+            ("1\n2\n\n", 5),
+            ("1 2\n\u{1a}", 4),
+        ] {
+            let mut t = Tokens::new("f", text, 3, true);
+            let e = t.numbers(3, "x").unwrap_err();
+            assert_eq!(e.line, Some(line), "{text:?}: {e}");
+        }
     }
 
     #[test]

@@ -135,8 +135,8 @@ fn quiet_vulkan_layers() {
 }
 
 fn main() -> ExitCode {
-    interrupt::install();
     quiet_vulkan_layers();
+    interrupt::install();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info {

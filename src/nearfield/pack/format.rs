@@ -197,7 +197,7 @@ pub fn encode_directory(sections: &[SectionInfo]) -> Vec<u8> {
 /// Parses directory bytes (whose checksum was checked) into entries; names must be non-empty
 /// printable ASCII followed only by NULs.
 pub fn decode_directory(b: &[u8]) -> Result<Vec<SectionInfo>, String> {
-    if b.len() % DIR_ENTRY_BYTES != 0 {
+    if !b.len().is_multiple_of(DIR_ENTRY_BYTES) {
         return Err(format!("{} bytes is not a whole number of entries", b.len()));
     }
     b.chunks_exact(DIR_ENTRY_BYTES)

@@ -710,19 +710,31 @@ impl Pack {
     /// `padding`.
     pub fn verify(&self) -> Result<VerifyReport> {
         let mut bytes = 0u64;
-        let mut buf = vec![0u8; 8 << 20];
-        for p in &self.pages {
-            let mut crc = crc32fast::Hasher::new();
-            let mut at = 0u64;
-            while at < p.length {
-                let k = (p.length - at).min(buf.len() as u64) as usize;
-                self.backing
-                    .read_exact_at(&mut buf[..k], p.offset + at)
-                    .map_err(|e| NearfieldError::io(&self.path, e))?;
-                crc.update(&buf[..k]);
-                at += k as u64;
-            }
-            let crc = crc.finalize();
+        // Every slot a table points at, in pool order: each page is read once, checked, and its
+        // tiles decoded from the same bytes.
+        let mut slots: Vec<u32> = self.tables.iter().copied().filter(|&g| g != EMPTY_TILE).collect();
+        slots.sort_unstable();
+        slots.dedup();
+        let mut next = slots.iter().peekable();
+        let mut tiles = 0u64;
+        let mut values = vec![0f32; (self.layout.tile_size * self.layout.tile_size) as usize];
+        let e = self.layout.entry_bytes as usize;
+        for (i, p) in self.pages.iter().enumerate() {
+            let mut buf = Vec::new();
+            buf.try_reserve_exact(p.length as usize).map_err(|_| {
+                NearfieldError::io(
+                    &self.path,
+                    std::io::Error::new(
+                        std::io::ErrorKind::OutOfMemory,
+                        format!("cannot allocate {} bytes for {}", p.length, p.name),
+                    ),
+                )
+            })?;
+            buf.resize(p.length as usize, 0);
+            self.backing
+                .read_exact_at(&mut buf, p.offset)
+                .map_err(|e| NearfieldError::io(&self.path, e))?;
+            let crc = crc32fast::hash(&buf);
             if crc != p.crc32 {
                 return Err(self.corrupt(
                     &p.name,
@@ -730,7 +742,23 @@ impl Pack {
                 ));
             }
             bytes += p.length;
+            let page = PageBytes(Arc::new(buf));
+            while let Some(&&g) = next.peek() {
+                match self.slot_location(g) {
+                    Some((pg, _)) if pg == i => {}
+                    Some((pg, _)) if pg > i => break,
+                    _ => return Err(self.corrupt(format::TILE_TABLES, format!("slot {g} is beyond the pool"))),
+                }
+                next.next();
+                decode_tile(self.slot(&page, g)?, e, &mut values)
+                    .map_err(|m| self.corrupt(&p.name, format!("slot {g}: {m}")))?;
+                tiles += 1;
+            }
         }
+        if let Some(&g) = next.next() {
+            return Err(self.corrupt(format::TILE_TABLES, format!("slot {g} is beyond the pool")));
+        }
+        let mut buf = vec![0u8; 8 << 20];
         let mut spans: Vec<(u64, u64)> = self.sections.iter().map(|s| (s.offset, s.offset + s.length)).collect();
         spans.sort_unstable();
         let mut gaps = Vec::new();
@@ -755,14 +783,6 @@ impl Pack {
                 }
                 at += k as u64;
                 bytes += k as u64;
-            }
-        }
-        let mut tiles = 0u64;
-        let mut values = vec![0f32; (self.layout.tile_size * self.layout.tile_size) as usize];
-        for &g in &self.tables {
-            if g != EMPTY_TILE {
-                self.decode_slot(g, &mut values)?;
-                tiles += 1;
             }
         }
         Ok(VerifyReport {

@@ -571,7 +571,7 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         .map(|(i, cam)| {
             let est = gather.camera(cam, dirs[i], &intrinsics, k_s, fixed_level);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if n % 16 == 0 {
+            if n.is_multiple_of(16) {
                 progress("estimating", 0.2 + 0.7 * n as f64 / m as f64);
             }
             est

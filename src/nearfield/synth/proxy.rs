@@ -102,7 +102,7 @@ impl ProxyMesh {
         let mut views = Vec::new();
         let mut primitives = Vec::new();
         let push_view = |bin: &mut Vec<u8>, views: &mut Vec<serde_json::Value>, data: &[u8], target: u32| {
-            while bin.len() % 4 != 0 {
+            while !bin.len().is_multiple_of(4) {
                 bin.push(0);
             }
             views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": data.len(), "target": target}));
@@ -156,7 +156,7 @@ impl ProxyMesh {
                 "extras": {"surface": s.name},
             }));
         }
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let doc = json!({

@@ -205,6 +205,11 @@ pub fn render(a: &RenderArgs) -> CliResult {
     }
     // Read and check the input before starting the GPU: options that do not apply are errors.
     let kind = detect(&a.file)?;
+    if kind == Some(lumiview::nearfield::scanfile::ScanFileKind::Manifest) {
+        // Never write over one of the scan's images.
+        let m = lumiview::nearfield::manifest::read_manifest(&a.file)?;
+        lumiview::files::ensure_not_input(&a.output, m.entries.iter().map(|e| e.file.as_path()))?;
+    }
     let photometry = match kind {
         Some(_) => {
             for (given, name) in [
@@ -432,16 +437,20 @@ pub fn render(a: &RenderArgs) -> CliResult {
     ro.exposure = exposure;
     r.render(&mut t, &cam, &ro)?;
     let px = t.read(&r.ctx, Attachment::Color)?;
+    // Written under a temporary name and renamed: a failed or interrupted render keeps the
+    // previous still.
+    let cannot = |e: &dyn std::fmt::Display| format!("{}: {e}", a.output.display());
+    let (mut tmp, _) = lumiview::files::TempOutput::create(&a.output).map_err(|e| cannot(&e))?;
     if exr {
         let f: Vec<f32> = px
             .chunks_exact(4)
             .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
             .collect();
-        exr::prelude::write_rgba_file(&a.output, w as usize, h as usize, |x, y| {
+        exr::prelude::write_rgba_file(tmp.path(), w as usize, h as usize, |x, y| {
             let i = (y * w as usize + x) * 4;
             (f[i], f[i + 1], f[i + 2], f[i + 3])
         })
-        .map_err(|e| format!("{}: {e}", a.output.display()))?;
+        .map_err(|e| cannot(&e))?;
     } else {
         let mut px = px;
         if !a.transparent {
@@ -457,14 +466,17 @@ pub fn render(a: &RenderArgs) -> CliResult {
         } else {
             (px, h)
         };
-        let file = std::fs::File::create(&a.output).map_err(|e| format!("{}: {e}", a.output.display()))?;
+        let file = tmp
+            .take_file()
+            .ok_or_else(|| cannot(&"the temporary file is not open"))?;
         let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h_out);
         enc.set_color(png::ColorType::Rgba);
         enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().map_err(|e| format!("{}: {e}", a.output.display()))?;
-        wr.write_image_data(&px)
-            .map_err(|e| format!("{}: {e}", a.output.display()))?;
+        let mut wr = enc.write_header().map_err(|e| cannot(&e))?;
+        wr.write_image_data(&px).map_err(|e| cannot(&e))?;
+        wr.finish().map_err(|e| cannot(&e))?;
     }
+    tmp.commit().map_err(|e| cannot(&e))?;
     println!(
         "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m, fov {fov}°; {}; {}; {} ({})",
         a.output.display(),
