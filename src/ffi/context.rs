@@ -57,8 +57,10 @@ pub struct ContextInner {
     pub renderer: Renderer,
     /// Targets by handle.
     pub targets: BTreeMap<u64, RenderTarget>,
-    /// Next target handle.
+    /// Serial of the next target.
     pub next_target: u64,
+    /// This context's tag, part of every handle it gives out (`ffi::handle`).
+    pub tag: u64,
 }
 
 /// An opaque context. Create with `lumi_context_create`, destroy with `lumi_context_destroy`.
@@ -190,6 +192,7 @@ pub unsafe extern "C" fn lumi_context_create(
                     renderer,
                     targets: BTreeMap::new(),
                     next_target: 1,
+                    tag: super::handle::new_context_tag(),
                 }),
                 poisoned: AtomicBool::new(false),
             });

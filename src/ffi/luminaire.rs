@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::context::{with_context, ContextInner};
+use super::handle;
 use super::{lumi_status, mat_arg, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
 use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings, DEFAULT_BUDGET_BYTES};
 use crate::gpu::renderer::Luminaire;
@@ -208,10 +209,28 @@ pub extern "C" fn lumi_lut_desc_default() -> lumi_lut_desc {
     }
 }
 
+/// The renderer's id of luminaire handle `lum` (argument `arg`) of this context.
+fn luminaire_id(c: &ContextInner, lum: lumi_luminaire, arg: &str) -> Result<LuminaireId, FfiError> {
+    handle::decode(c.tag, handle::Kind::Luminaire, lum, arg).map(LuminaireId)
+}
+
+/// The renderer's id of instance handle `instance` of this context, which must still exist.
+fn instance_id(c: &ContextInner, instance: lumi_instance) -> Result<InstanceId, FfiError> {
+    let id = handle::decode(c.tag, handle::Kind::Instance, instance, "instance").map(InstanceId)?;
+    if !c.renderer.has_instance(id) {
+        return Err(FfiError::invalid(
+            "instance",
+            format!("no instance with handle {instance:#x} (destroyed, or its luminaire was)"),
+        ));
+    }
+    Ok(id)
+}
+
 fn luminaire_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Luminaire, FfiError> {
+    let id = luminaire_id(c, lum, "luminaire")?;
     c.renderer
-        .luminaire(LuminaireId(lum))
-        .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {lum}")))
+        .luminaire(id)
+        .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {lum:#x} (destroyed?)")))
 }
 
 pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Photometry, FfiError> {
@@ -219,7 +238,7 @@ pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Ph
         FfiError::invalid(
             "luminaire",
             format!(
-                "luminaire {lum} is a near-field scan (LUMI_LUMINAIRE_NEARFIELD); this call needs far-field \
+                "luminaire {lum:#x} is a near-field scan (LUMI_LUMINAIRE_NEARFIELD); this call needs far-field \
                  photometry (IES or EULUMDAT)"
             ),
         )
@@ -228,13 +247,14 @@ pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Ph
 
 /// The luminaire an instance draws, and the instance's handle checked.
 fn instance_luminaire(c: &ContextInner, instance: lumi_instance) -> Result<(lumi_luminaire, &Luminaire), FfiError> {
-    let (lum, _) = c.renderer.instance(InstanceId(instance)).map_err(|_| {
+    let (lum, _) = c.renderer.instance(instance_id(c, instance)?).map_err(|_| {
         FfiError::invalid(
             "instance",
-            format!("no instance with handle {instance} (destroyed, or its luminaire was)"),
+            format!("no instance with handle {instance:#x} (destroyed, or its luminaire was)"),
         )
     })?;
-    Ok((lum.0, luminaire_of(c, lum.0)?))
+    let lum = handle::encode(c.tag, handle::Kind::Luminaire, lum.0);
+    Ok((lum, luminaire_of(c, lum)?))
 }
 
 /// The near-field description from C, checked.
@@ -409,7 +429,7 @@ pub unsafe extern "C" fn lumi_luminaire_load(
                 return Err(FfiError::null("out"));
             }
             let id = load_any(c, &path, &scan_desc(std::ptr::null())?)?;
-            write_out(out, id.0);
+            write_out(out, handle::encode(c.tag, handle::Kind::Luminaire, id.0));
             Ok(())
         })
     }
@@ -449,7 +469,7 @@ pub unsafe extern "C" fn lumi_luminaire_load_ex(
             }
             let d = scan_desc(desc)?;
             let id = load_any(c, &path, &d)?;
-            write_out(out, id.0);
+            write_out(out, handle::encode(c.tag, handle::Kind::Luminaire, id.0));
             Ok(())
         })
     }
@@ -470,9 +490,13 @@ pub unsafe extern "C" fn lumi_luminaire_destroy(
             if luminaire == 0 {
                 return Ok(());
             }
-            c.renderer
-                .remove_luminaire(LuminaireId(luminaire))
-                .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {luminaire}")))
+            let id = luminaire_id(c, luminaire, "luminaire")?;
+            c.renderer.remove_luminaire(id).map_err(|_| {
+                FfiError::invalid(
+                    "luminaire",
+                    format!("no luminaire with handle {luminaire:#x} (destroyed?)"),
+                )
+            })
         })
     }
 }
@@ -677,14 +701,13 @@ pub unsafe extern "C" fn lumi_instance_create(
             if out.is_null() {
                 return Err(FfiError::null("out"));
             }
-            let id = c
-                .renderer
-                .add_instance(LuminaireId(luminaire), m)
-                .map_err(|e| match e {
-                    crate::gpu::GpuError::InvalidArgument { name, message } => FfiError::invalid(&name, message),
-                    other => other.into(),
-                })?;
-            write_out(out, id.0);
+            luminaire_of(c, luminaire)?;
+            let lum = luminaire_id(c, luminaire, "luminaire")?;
+            let id = c.renderer.add_instance(lum, m).map_err(|e| match e {
+                crate::gpu::GpuError::InvalidArgument { name, message } => FfiError::invalid(&name, message),
+                other => other.into(),
+            })?;
+            write_out(out, handle::encode(c.tag, handle::Kind::Instance, id.0));
             Ok(())
         })
     }
@@ -704,7 +727,7 @@ pub unsafe extern "C" fn lumi_instance_set_transform(
     unsafe {
         with_context("lumi_instance_set_transform", ctx, |c| {
             let m = mat_arg(model, "model")?;
-            Ok(c.renderer.set_transform(InstanceId(instance), m)?)
+            Ok(c.renderer.set_transform(instance_id(c, instance)?, m)?)
         })
     }
 }
@@ -724,7 +747,7 @@ pub unsafe extern "C" fn lumi_instance_destroy(
             if instance == 0 {
                 return Ok(());
             }
-            Ok(c.renderer.remove_instance(InstanceId(instance))?)
+            Ok(c.renderer.remove_instance(instance_id(c, instance)?)?)
         })
     }
 }
@@ -759,14 +782,14 @@ pub unsafe extern "C" fn lumi_instance_illuminance(
                 return Err(FfiError::invalid(
                     "instance",
                     format!(
-                        "instance {instance} draws near-field luminaire {lum} (LUMI_LUMINAIRE_NEARFIELD), which has \
+                        "instance {instance:#x} draws near-field luminaire {lum:#x} (LUMI_LUMINAIRE_NEARFIELD), which has \
                          no far-field photometry to compute illuminance from"
                     ),
                 ));
             }
             let p = glam::Vec3::new(*point, *point.add(1), *point.add(2));
             let n = glam::Vec3::new(*normal, *normal.add(1), *normal.add(2));
-            let e = c.renderer.illuminance(InstanceId(instance), p, n)?;
+            let e = c.renderer.illuminance(instance_id(c, instance)?, p, n)?;
             write_out(lux, e);
             Ok(())
         })
@@ -805,13 +828,14 @@ pub unsafe extern "C" fn lumi_instance_set_nearfield(
                 return Err(FfiError::invalid(
                     "instance",
                     format!(
-                        "instance {instance} draws far-field luminaire {lum} (LUMI_LUMINAIRE_FARFIELD); near-field \
+                        "instance {instance:#x} draws far-field luminaire {lum:#x} (LUMI_LUMINAIRE_FARFIELD); near-field \
                          settings apply to LUMI_LUMINAIRE_NEARFIELD luminaires"
                     ),
                 ));
             }
+            let id = instance_id(c, instance)?;
             Ok(c.renderer
-                .set_nearfield_settings(InstanceId(instance), NearfieldSettings { mode, proxy: use_proxy })?)
+                .set_nearfield_settings(id, NearfieldSettings { mode, proxy: use_proxy })?)
         })
     }
 }

@@ -14,6 +14,7 @@
 #![allow(non_camel_case_types)]
 
 pub mod context;
+mod handle;
 pub mod luminaire;
 pub mod render;
 pub mod target;

@@ -160,7 +160,7 @@ pub unsafe extern "C" fn lumi_render(
             let ContextInner { renderer, targets, .. } = c;
             let t = targets
                 .get_mut(&target)
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target:#x}")))?;
             renderer.render(t, &cam, &o)?;
             Ok(())
         })

@@ -135,9 +135,15 @@ pub(crate) fn attachment(v: u32) -> Result<Attachment, FfiError> {
 }
 
 pub(crate) fn target_mut(c: &mut ContextInner, t: lumi_target) -> Result<&mut RenderTarget, FfiError> {
+    check_target(c, t)?;
     c.targets
         .get_mut(&t)
-        .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {t}")))
+        .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {t:#x} (destroyed?)")))
+}
+
+/// Checks that `t` is a target handle of this context (the map is keyed by the whole handle).
+pub(crate) fn check_target(c: &ContextInner, t: lumi_target) -> Result<(), FfiError> {
+    super::handle::decode(c.tag, super::handle::Kind::Target, t, "target").map(|_| ())
 }
 
 /// Creates a render target. `out` is written only on success.
@@ -171,7 +177,7 @@ pub unsafe extern "C" fn lumi_target_create(
                 semaphores: d.semaphores,
             };
             let t = RenderTarget::new(&c.renderer.ctx, &td)?;
-            let id = c.next_target;
+            let id = super::handle::encode(c.tag, super::handle::Kind::Target, c.next_target);
             c.next_target += 1;
             c.targets.insert(id, t);
             write_out(out, id);
@@ -193,11 +199,12 @@ pub unsafe extern "C" fn lumi_target_destroy(ctx: *mut lumi_context, target: lum
             if target == 0 {
                 return Ok(());
             }
+            check_target(c, target)?;
             c.renderer.ctx.wait_idle()?;
             c.targets
                 .remove(&target)
                 .map(|_| ())
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))
+                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)")))
         })
     }
 }
@@ -224,10 +231,10 @@ pub unsafe extern "C" fn lumi_target_export(
             }
             let which = attachment(which)?;
             let caps = c.renderer.ctx.caps.clone();
-            let t = c
-                .targets
-                .get(&target)
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            check_target(c, target)?;
+            let t = c.targets.get(&target).ok_or_else(|| {
+                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
+            })?;
             let gl_internal_format = match which {
                 Attachment::Color => t.desc.color.gl_internal_format(),
                 Attachment::Depth => t.desc.depth.gl_internal_format(),
@@ -284,10 +291,11 @@ pub unsafe extern "C" fn lumi_target_read_pixels(
                 return Err(FfiError::null("written"));
             }
             let which = attachment(which)?;
+            check_target(c, target)?;
             let ContextInner { renderer, targets, .. } = c;
-            let t = targets
-                .get_mut(&target)
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            let t = targets.get_mut(&target).ok_or_else(|| {
+                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
+            })?;
             let need = t.desc.width as usize * t.desc.height as usize * t.bytes_per_pixel(which) as usize;
             if which == Attachment::Depth && t.desc.depth == DepthFormat::None {
                 return Err(FfiError::invalid("which", "the target has no depth output"));
@@ -334,10 +342,10 @@ pub unsafe extern "C" fn lumi_target_export_semaphores(
             if host_done_fd.is_null() {
                 return Err(FfiError::null("host_done_fd"));
             }
-            let t = c
-                .targets
-                .get(&target)
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target}")))?;
+            check_target(c, target)?;
+            let t = c.targets.get(&target).ok_or_else(|| {
+                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
+            })?;
             let (a, b) = t.export_semaphores()?;
             write_out(render_done_fd, a.into_raw_fd());
             write_out(host_done_fd, b.into_raw_fd());
