@@ -96,9 +96,12 @@ bool lv_scan_ensure(const char *repo_root, lv_scan_files *out) {
     int c = snprintf(out->pack, sizeof out->pack, "%s/%s-%s-%s.lvpack", dir, LV_SCAN_LUMINAIRE, LV_SCAN_LAYOUT,
                      LV_SCAN_SIZE);
     int d = snprintf(out->proxy, sizeof out->proxy, "%s/%s-proxy.glb", dir, LV_SCAN_LUMINAIRE);
+    /* $LUMIVIEW_CLI, else the debug CLI, else the release one (after only `cargo build --release`). */
     const char *env_cli = getenv("LUMIVIEW_CLI");
     int e = env_cli && env_cli[0] ? snprintf(cli, sizeof cli, "%s", env_cli)
                                   : snprintf(cli, sizeof cli, "%s/target/debug/lumiview", repo_root);
+    if (!(env_cli && env_cli[0]) && e >= 0 && (size_t)e < sizeof cli && access(cli, X_OK) != 0)
+        e = snprintf(cli, sizeof cli, "%s/target/release/lumiview", repo_root);
     if (a < 0 || b < 0 || c < 0 || d < 0 || e < 0 || (size_t)a >= sizeof target || (size_t)b >= sizeof dir ||
         (size_t)c >= sizeof out->pack || (size_t)d >= sizeof out->proxy || (size_t)e >= sizeof cli) {
         fprintf(stderr, "lv_scan: paths under %s are too long\n", repo_root);
@@ -111,7 +114,7 @@ bool lv_scan_ensure(const char *repo_root, lv_scan_files *out) {
     if (!need_pack && !need_proxy) return true;
     if (access(cli, X_OK) != 0) {
         fprintf(stderr, "lv_scan: the near-field scan %s is not there yet and the lumiview CLI %s cannot be run "
-                        "(%s): build it with `cargo build --bin lumiview` or set LUMIVIEW_CLI\n",
+                        "(%s): build it with `cargo build --release` or `cargo build --bin lumiview`, or set LUMIVIEW_CLI\n",
                 out->pack, cli, strerror(errno));
         return false;
     }
