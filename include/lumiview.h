@@ -186,8 +186,9 @@ typedef struct lumi_device_caps {
 
 // How to load a luminaire (`lumi_luminaire_load_ex`). Start from `lumi_luminaire_desc_default()`.
 // The near-field fields apply to scans (`.lvpack`, JSON scan manifest, TM-25 ray file); for a
-// photometric file (IES, EULUMDAT) `budget_bytes` and `cache_dir` are ignored, and `proxy_path`
-// and `content_radius_m` must keep their defaults (NULL, 0).
+// photometric file (IES, EULUMDAT) `cache_dir` is ignored, `budget_bytes` is checked (> 0, as for
+// every file) but otherwise unused, and `proxy_path` and `content_radius_m` must keep their
+// defaults (NULL, 0).
 typedef struct lumi_luminaire_desc {
   // Near-field: GPU bytes the luminaire may hold (camera records, selection tables and tile
   // pool together), > 0; default 512 MiB. A scan that does not fit is streamed: each frame makes

@@ -129,8 +129,9 @@ pub struct lumi_luminaire_info {
 
 /// How to load a luminaire (`lumi_luminaire_load_ex`). Start from `lumi_luminaire_desc_default()`.
 /// The near-field fields apply to scans (`.lvpack`, JSON scan manifest, TM-25 ray file); for a
-/// photometric file (IES, EULUMDAT) `budget_bytes` and `cache_dir` are ignored, and `proxy_path`
-/// and `content_radius_m` must keep their defaults (NULL, 0).
+/// photometric file (IES, EULUMDAT) `cache_dir` is ignored, `budget_bytes` is checked (> 0, as for
+/// every file) but otherwise unused, and `proxy_path` and `content_radius_m` must keep their
+/// defaults (NULL, 0).
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct lumi_luminaire_desc {
