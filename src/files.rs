@@ -82,6 +82,22 @@ pub fn open_regular(path: &Path, max_bytes: u64, what: &str) -> std::io::Result<
     Ok((file, meta.len()))
 }
 
+/// An empty vector with room for `n` items, or an [`std::io::ErrorKind::OutOfMemory`] error
+/// naming `what` when the memory cannot be had (for buffers as large as a file: never an abort).
+pub fn try_vec<T>(n: usize, what: &str) -> std::io::Result<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| {
+        std::io::Error::new(
+            std::io::ErrorKind::OutOfMemory,
+            format!(
+                "cannot allocate {} bytes for {what}",
+                n.saturating_mul(std::mem::size_of::<T>())
+            ),
+        )
+    })?;
+    Ok(v)
+}
+
 /// Reads all of `path` if it is a regular file of at most `max_bytes` bytes ([`open_regular`]). At
 /// most `max_bytes` are read even if the file grows meanwhile.
 ///
@@ -89,13 +105,7 @@ pub fn open_regular(path: &Path, max_bytes: u64, what: &str) -> std::io::Result<
 /// be allocated; a file that grew past the limit while it was read.
 pub fn read_regular(path: &Path, max_bytes: u64, what: &str) -> std::io::Result<Vec<u8>> {
     let (file, len) = open_regular(path, max_bytes, what)?;
-    let mut bytes = Vec::new();
-    bytes.try_reserve_exact(len as usize).map_err(|_| {
-        std::io::Error::new(
-            std::io::ErrorKind::OutOfMemory,
-            format!("cannot allocate the {len} bytes to read it"),
-        )
-    })?;
+    let mut bytes = try_vec(len as usize, "reading it")?;
     file.take(max_bytes.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > max_bytes {
         return Err(refused(format!(
@@ -250,11 +260,6 @@ impl TempOutput {
     /// The temporary file's path.
     pub fn path(&self) -> &Path {
         &self.temp
-    }
-
-    /// The output's final path.
-    pub fn target(&self) -> &Path {
-        &self.target
     }
 
     /// The open temporary file (read + write). `None` after [`TempOutput::take_file`].

@@ -89,6 +89,22 @@ fn temporaries(d: &Path) -> Vec<String> {
         .collect()
 }
 
+/// Packs a small synthetic disc scan (40 images of 32 × 32 px) to `out`.
+fn small_pack(out: &Path) -> Output {
+    lumiview(&[
+        "pack",
+        "--synth",
+        "disc",
+        "--layout",
+        "rigo:20",
+        "--size",
+        "32x32",
+        "--quiet",
+        "-o",
+        s(out),
+    ])
+}
+
 fn gpu_or_skip() -> bool {
     gpu_common::renderer().is_some()
 }
@@ -372,18 +388,7 @@ fn f05_concurrent_interrupted_and_killed_packs_leave_a_whole_file_and_no_tempora
             assert!(!temporaries(&d).is_empty(), "a killed pack leaves its temporary file");
         }
     }
-    let o = lumiview(&[
-        "pack",
-        "--synth",
-        "disc",
-        "--layout",
-        "rigo:20",
-        "--size",
-        "32x32",
-        "--quiet",
-        "-o",
-        s(&out),
-    ]);
+    let o = small_pack(&out);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(temporaries(&d).is_empty(), "after the next run: {:?}", temporaries(&d));
     std::fs::remove_dir_all(&d).ok();
@@ -547,18 +552,7 @@ fn with_tile_value(pack: &[u8], bits: u16) -> Vec<u8> {
 fn f10_verify_checks_the_values_not_only_the_checksums() {
     let d = dir("f10");
     let good = d.join("good.lvpack");
-    let o = lumiview(&[
-        "pack",
-        "--synth",
-        "disc",
-        "--layout",
-        "rigo:20",
-        "--size",
-        "32x32",
-        "--quiet",
-        "-o",
-        s(&good),
-    ]);
+    let o = small_pack(&good);
     assert!(o.status.success(), "{}", stderr(&o));
     let bytes = std::fs::read(&good).unwrap();
     let o = lumiview(&["info", "--verify", s(&good)]);

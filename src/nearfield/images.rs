@@ -713,13 +713,7 @@ pub fn read_image(path: &Path) -> Result<LuminanceImage> {
     let file = open_regular(path)?;
     let len = file.metadata().map_err(io)?.len();
     // Up to MAX_FILE_BYTES (3 GiB): a failed allocation is an error, not an abort.
-    let mut bytes = Vec::new();
-    bytes.try_reserve_exact(len as usize).map_err(|_| {
-        io(std::io::Error::new(
-            std::io::ErrorKind::OutOfMemory,
-            format!("cannot allocate the {len} bytes to read it"),
-        ))
-    })?;
+    let mut bytes = crate::files::try_vec(len as usize, "reading it").map_err(io)?;
     file.take(MAX_FILE_BYTES).read_to_end(&mut bytes).map_err(io)?;
     decode_image(&bytes, path)
 }
@@ -730,21 +724,13 @@ const MAX_FILE_BYTES: u64 = MAX_PIXELS * 12 + PF_MAX_HEADER as u64;
 /// Opens a regular file of at most [`MAX_FILE_BYTES`] (not a device, FIFO or folder, which could
 /// block or never end).
 fn open_regular(path: &Path) -> Result<std::fs::File> {
-    let io = |e| NearfieldError::io(path, e);
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if !meta.is_file() {
-        return Err(fmt_err(path, "not a regular file"));
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(fmt_err(
-            path,
-            format!(
-                "{} bytes is larger than any accepted image ({MAX_FILE_BYTES} bytes)",
-                meta.len()
-            ),
-        ));
-    }
-    std::fs::File::open(path).map_err(io)
+    // A refusal (not a regular file, too large) is a format error; anything else an I/O error.
+    crate::files::open_regular(path, MAX_FILE_BYTES, "a luminance image")
+        .map(|(f, _)| f)
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidInput => fmt_err(path, e.to_string()),
+            _ => NearfieldError::io(path, e),
+        })
 }
 
 /// Reads only the header of a luminance image file: its format and size, and checks that the file is

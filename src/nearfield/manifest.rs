@@ -427,19 +427,12 @@ fn hemisphere_of(dir: DVec3, tag: Option<Hemisphere>) -> Hemisphere {
 /// [`NearfieldError::Io`] when it cannot be read, [`NearfieldError::Format`] when it is larger than
 /// [`MAX_MANIFEST_BYTES`], and those of [`parse_manifest`].
 pub fn read_manifest(path: &Path) -> Result<Manifest> {
-    let meta = std::fs::metadata(path).map_err(|e| NearfieldError::io(path, e))?;
-    if !meta.is_file() {
-        return Err(NearfieldError::format(path, "not a regular file"));
-    }
-    let len = meta.len();
-    if len > MAX_MANIFEST_BYTES {
-        return Err(NearfieldError::format(
-            path,
-            format!("manifest is {len} bytes; at most {MAX_MANIFEST_BYTES} are read"),
-        ));
-    }
-    let bytes = crate::files::read_regular(path, MAX_MANIFEST_BYTES, "a scan manifest")
-        .map_err(|e| NearfieldError::io(path, e))?;
+    // A refusal (not a regular file, too large) is a format error; anything else an I/O error.
+    let bytes =
+        crate::files::read_regular(path, MAX_MANIFEST_BYTES, "a scan manifest").map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidInput => NearfieldError::format(path, e.to_string()),
+            _ => NearfieldError::io(path, e),
+        })?;
     parse_manifest(&bytes, path)
 }
 

@@ -593,16 +593,8 @@ impl Input<'_> {
         let bytes = (count as u64).saturating_mul(4);
         self.ensure(bytes, what)?;
         // As large as the file (gigabytes for 10⁸ rays): a failed allocation is an error, not an abort.
-        let mut out = Vec::new();
-        out.try_reserve_exact(count).map_err(|_| {
-            NearfieldError::io(
-                self.path,
-                std::io::Error::new(
-                    std::io::ErrorKind::OutOfMemory,
-                    format!("cannot allocate {bytes} bytes for the {what}"),
-                ),
-            )
-        })?;
+        let mut out =
+            crate::files::try_vec(count, &format!("the {what}")).map_err(|e| NearfieldError::io(self.path, e))?;
         let conv = |c: &[u8]| f32::from_le_bytes([c[0], c[1], c[2], c[3]]);
         match &mut self.src {
             Src::Bytes(b) => {

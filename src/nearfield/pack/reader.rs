@@ -319,16 +319,8 @@ impl Pack {
             ));
         }
         // Hundreds of MiB for a full scan: a failed allocation is an error, not an abort.
-        let mut tables: Vec<u32> = Vec::new();
-        tables.try_reserve_exact((ts.length / 4) as usize).map_err(|_| {
-            NearfieldError::io(
-                &path,
-                std::io::Error::new(
-                    std::io::ErrorKind::OutOfMemory,
-                    format!("cannot allocate {} bytes for the tile tables", ts.length),
-                ),
-            )
-        })?;
+        let mut tables: Vec<u32> = crate::files::try_vec((ts.length / 4) as usize, "the tile tables")
+            .map_err(|e| NearfieldError::io(&path, e))?;
         let mut crc = crc32fast::Hasher::new();
         let mut at = 0u64;
         while at < ts.length {
@@ -720,16 +712,8 @@ impl Pack {
         let mut values = vec![0f32; (self.layout.tile_size * self.layout.tile_size) as usize];
         let e = self.layout.entry_bytes as usize;
         for (i, p) in self.pages.iter().enumerate() {
-            let mut buf = Vec::new();
-            buf.try_reserve_exact(p.length as usize).map_err(|_| {
-                NearfieldError::io(
-                    &self.path,
-                    std::io::Error::new(
-                        std::io::ErrorKind::OutOfMemory,
-                        format!("cannot allocate {} bytes for {}", p.length, p.name),
-                    ),
-                )
-            })?;
+            let mut buf =
+                crate::files::try_vec(p.length as usize, &p.name).map_err(|e| NearfieldError::io(&self.path, e))?;
             buf.resize(p.length as usize, 0);
             self.backing
                 .read_exact_at(&mut buf, p.offset)

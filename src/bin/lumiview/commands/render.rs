@@ -205,8 +205,8 @@ pub fn render(a: &RenderArgs) -> CliResult {
     }
     // Read and check the input before starting the GPU: options that do not apply are errors.
     let kind = detect(&a.file)?;
-    if kind == Some(lumiview::nearfield::scanfile::ScanFileKind::Manifest) {
-        // Never write over one of the scan's images.
+    if kind == Some(lumiview::nearfield::scanfile::ScanFileKind::Manifest) && a.output.exists() {
+        // Never write over one of the scan's images (read the manifest only when that could be).
         let m = lumiview::nearfield::manifest::read_manifest(&a.file)?;
         lumiview::files::ensure_not_input(&a.output, m.entries.iter().map(|e| e.file.as_path()))?;
     }
