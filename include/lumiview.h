@@ -533,6 +533,30 @@ lumi_status lumi_luminaire_get_info(const struct lumi_context *ctx,
                                     lumi_luminaire luminaire,
                                     struct lumi_luminaire_info *out);
 
+// The capture cameras of a near-field luminaire (its scan's layout), in the scan's camera order
+// (the order of `lumiview info SCAN` and of the pack): camera i's position is
+// `positions_m[3i..3i+3]` and its optical axis (unit vector from the camera towards the scene)
+// `directions[3i..3i+3]`, both in the luminaire frame (metres; X C0, Y C90, Z up). For a ray
+// file these are its virtual scan's cameras. `lumi_luminaire_info.camera_count` is the count.
+//
+// - `positions_m`, `directions`: NULL, or room for `capacity` × 3 doubles each; with both NULL
+//   only `count` is written (a size query).
+// - `count`: receives the number of cameras, also on `LUMI_STATUS_BUFFER_TOO_SMALL`.
+//
+// Errors: `LUMI_STATUS_BUFFER_TOO_SMALL` (`capacity` below the count with a buffer given; nothing
+// written but `count`), `LUMI_STATUS_INVALID_ARGUMENT` (a far-field luminaire, or a stale, foreign
+// or wrong-kind handle), `LUMI_STATUS_NULL_POINTER` (`count`).
+//
+// # Safety
+// `ctx` is a live context; `positions_m` and `directions` NULL or `capacity × 3` writable doubles;
+// `count` writable.
+lumi_status lumi_luminaire_cameras(const struct lumi_context *ctx,
+                                   lumi_luminaire luminaire,
+                                   double *positions_m,
+                                   double *directions,
+                                   size_t capacity,
+                                   size_t *count);
+
 // Luminous intensity (cd) of a luminaire towards (C, γ) in degrees, and the luminance (cd/m²) of
 // its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 // be NULL; both are written only on success.

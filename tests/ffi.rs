@@ -526,6 +526,46 @@ fn nearfield_scans_through_the_c_api() {
         assert_eq!(info.kind, LUMI_LUMINAIRE_NEARFIELD);
         assert_eq!(info.camera_count, cameras);
         assert!(cameras > 300, "{cameras}");
+        // The camera layout: a size query, a short buffer, then positions and axes equal to the
+        // synthetic scan's own cameras (the input, not our pack), in its order.
+        let mut count = 0usize;
+        assert_eq!(
+            lumi_luminaire_cameras(ctx, lum, ptr::null_mut(), ptr::null_mut(), 0, &mut count),
+            LUMI_STATUS_OK
+        );
+        assert_eq!(count, cameras as usize);
+        let mut pos = vec![f64::NAN; 3 * count];
+        let mut dirs = vec![f64::NAN; 3 * count];
+        let mut short = 0usize;
+        assert_eq!(
+            lumi_luminaire_cameras(ctx, lum, pos.as_mut_ptr(), ptr::null_mut(), count - 1, &mut short),
+            LUMI_STATUS_BUFFER_TOO_SMALL
+        );
+        assert_eq!(short, count);
+        assert!(pos[0].is_nan(), "nothing written on BUFFER_TOO_SMALL");
+        assert_eq!(
+            lumi_luminaire_cameras(ctx, lum, pos.as_mut_ptr(), dirs.as_mut_ptr(), count, &mut count),
+            LUMI_STATUS_OK
+        );
+        for (i, cam) in scan.set.cameras.iter().enumerate() {
+            let p = glam::DVec3::from_slice(&pos[3 * i..3 * i + 3]);
+            let f = glam::DVec3::from_slice(&dirs[3 * i..3 * i + 3]);
+            assert!(
+                (p - cam.position_m).length() < 1e-9,
+                "camera {i}: {p} vs {}",
+                cam.position_m
+            );
+            assert!((f - cam.forward).length() < 1e-9, "camera {i}: {f} vs {}", cam.forward);
+            assert!(
+                (p.length() - info.capture_radius_m).abs() < 1e-9,
+                "camera {i} on the capture sphere"
+            );
+            assert!(f.dot(-p.normalize()) > 0.999, "camera {i} looks at the capture centre");
+        }
+        assert_eq!(
+            lumi_luminaire_cameras(ctx, lum, pos.as_mut_ptr(), dirs.as_mut_ptr(), count, ptr::null_mut()),
+            LUMI_STATUS_NULL_POINTER
+        );
         assert!(!info.has_proxy);
         assert!(
             (info.capture_radius_m - 1.117).abs() < 1e-9,
@@ -899,6 +939,12 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
                 "lumi_luminaire_get_info",
                 lumi_luminaire_get_info(a, lum, &mut info),
                 info.flux_lm == -7.0,
+            ));
+            let mut n_cams = 7usize;
+            v.push((
+                "lumi_luminaire_cameras",
+                lumi_luminaire_cameras(a, lum, ptr::null_mut(), ptr::null_mut(), 0, &mut n_cams),
+                n_cams == 7,
             ));
             let mut cd = -7.0;
             v.push((

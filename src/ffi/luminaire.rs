@@ -570,6 +570,70 @@ pub unsafe extern "C" fn lumi_luminaire_get_info(
     }
 }
 
+/// The capture cameras of a near-field luminaire (its scan's layout), in the scan's camera order
+/// (the order of `lumiview info SCAN` and of the pack): camera i's position is
+/// `positions_m[3i..3i+3]` and its optical axis (unit vector from the camera towards the scene)
+/// `directions[3i..3i+3]`, both in the luminaire frame (metres; X C0, Y C90, Z up). For a ray
+/// file these are its virtual scan's cameras. `lumi_luminaire_info.camera_count` is the count.
+///
+/// - `positions_m`, `directions`: NULL, or room for `capacity` × 3 doubles each; with both NULL
+///   only `count` is written (a size query).
+/// - `count`: receives the number of cameras, also on `LUMI_STATUS_BUFFER_TOO_SMALL`.
+///
+/// Errors: `LUMI_STATUS_BUFFER_TOO_SMALL` (`capacity` below the count with a buffer given; nothing
+/// written but `count`), `LUMI_STATUS_INVALID_ARGUMENT` (a far-field luminaire, or a stale, foreign
+/// or wrong-kind handle), `LUMI_STATUS_NULL_POINTER` (`count`).
+///
+/// # Safety
+/// `ctx` is a live context; `positions_m` and `directions` NULL or `capacity × 3` writable doubles;
+/// `count` writable.
+#[no_mangle]
+pub unsafe extern "C" fn lumi_luminaire_cameras(
+    ctx: *const crate::ffi::context::lumi_context,
+    luminaire: lumi_luminaire,
+    positions_m: *mut f64,
+    directions: *mut f64,
+    capacity: usize,
+    count: *mut usize,
+) -> lumi_status {
+    // SAFETY: forwarded contract.
+    unsafe {
+        with_context("lumi_luminaire_cameras", ctx, |c| {
+            if count.is_null() {
+                return Err(FfiError::null("count"));
+            }
+            let Luminaire::Nearfield(n) = luminaire_of(c, luminaire)? else {
+                return Err(FfiError::invalid(
+                    "luminaire",
+                    "a far-field luminaire (photometric file) has no capture cameras",
+                ));
+            };
+            let cameras = &n.pack.rayset().cameras;
+            if positions_m.is_null() && directions.is_null() {
+                write_out(count, cameras.len());
+                return Ok(());
+            }
+            if capacity < cameras.len() {
+                write_out(count, cameras.len());
+                return Err(FfiError::new(
+                    LUMI_STATUS_BUFFER_TOO_SMALL,
+                    format!("capacity {capacity} < {} cameras", cameras.len()),
+                ));
+            }
+            for (i, cam) in cameras.iter().enumerate() {
+                if !positions_m.is_null() {
+                    std::ptr::copy_nonoverlapping(cam.position_m.to_array().as_ptr(), positions_m.add(3 * i), 3);
+                }
+                if !directions.is_null() {
+                    std::ptr::copy_nonoverlapping(cam.forward.to_array().as_ptr(), directions.add(3 * i), 3);
+                }
+            }
+            write_out(count, cameras.len());
+            Ok(())
+        })
+    }
+}
+
 /// Luminous intensity (cd) of a luminaire towards (C, γ) in degrees, and the luminance (cd/m²) of
 /// its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 /// be NULL; both are written only on success.
