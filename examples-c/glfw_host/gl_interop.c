@@ -1,4 +1,4 @@
-/* GL import of lumiview's exports; see gl_interop.h. Spec: EXT_external_objects and
+/* GL import of lumiview's exports through lumiview_gl.h; see gl_interop.h. Spec: EXT_external_objects and
  * EXT_external_objects_fd (the GL_EXT_memory_object(_fd) entry points). */
 #include "gl_interop.h"
 
@@ -6,6 +6,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "lumiview_gl.h"
 #include "lv_lumi.h"
 
 bool gl_query_uuids(gl_uuids *u) {
@@ -45,46 +46,24 @@ bool gl_uuids_match(const gl_uuids *u, const uint8_t device[16], const uint8_t d
 
 bool gl_import(const lumi_export *e, const gl_uuids *u, gl_imported *out) {
     memset(out, 0, sizeof *out);
-    int fd = e->fd;
     const char *what = e->gl_internal_format == GL_R32F ? "the depth image" : "the colour image";
-    if (!gl_uuids_match(u, e->device_uuid, e->driver_uuid, what)) goto fail;
-    if (e->gl_tiling != GL_OPTIMAL_TILING_EXT) {
-        fprintf(stderr, "glfw_host: %s has GL tiling 0x%x, expected GL_OPTIMAL_TILING_EXT\n", what, e->gl_tiling);
-        goto fail;
+    /* The same check lumi_gl_import makes, here with a message naming both sides. */
+    if (!gl_uuids_match(u, e->device_uuid, e->driver_uuid, what)) {
+        if (e->fd >= 0) close(e->fd);
+        return false;
     }
-    if (e->width == 0 || e->height == 0 || e->allocation_size == 0) {
-        fprintf(stderr, "glfw_host: %s: empty export (%ux%u, %llu bytes)\n", what, e->width, e->height,
-                (unsigned long long)e->allocation_size);
-        goto fail;
+    GLenum err = lumi_gl_import(e, &out->memory, &out->texture); /* consumes e->fd */
+    if (err != GL_NO_ERROR) {
+        fprintf(stderr, "glfw_host: lumi_gl_import of %s (%ux%u, GL format 0x%x, %llu bytes) failed: GL error 0x%x\n",
+                what, e->width, e->height, e->gl_internal_format, (unsigned long long)e->allocation_size, err);
+        return false;
     }
-    lv_gl_ok("before the import"); /* clear stale errors so the checks below are ours */
-    glCreateMemoryObjectsEXT(1, &out->memory);
-    GLint dedicated = e->dedicated ? GL_TRUE : GL_FALSE;
-    glMemoryObjectParameterivEXT(out->memory, GL_DEDICATED_MEMORY_OBJECT_EXT, &dedicated);
-    if (!lv_gl_ok("glCreateMemoryObjectsEXT / glMemoryObjectParameterivEXT")) goto fail;
-    glImportMemoryFdEXT(out->memory, e->allocation_size, GL_HANDLE_TYPE_OPAQUE_FD_EXT, fd);
-    if (!lv_gl_ok("glImportMemoryFdEXT") || !glIsMemoryObjectEXT(out->memory)) goto fail;
-    fd = -1; /* owned by GL now */
-    glCreateTextures(GL_TEXTURE_2D, 1, &out->texture);
-    glTextureParameteri(out->texture, GL_TEXTURE_TILING_EXT, (GLint)e->gl_tiling);
-    glTextureStorageMem2DEXT(out->texture, 1, e->gl_internal_format, (GLsizei)e->width, (GLsizei)e->height,
-                             out->memory, 0);
-    glTextureParameteri(out->texture, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTextureParameteri(out->texture, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-    glTextureParameteri(out->texture, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
-    glTextureParameteri(out->texture, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    if (!lv_gl_ok("glTextureStorageMem2DEXT")) goto fail;
     out->width = e->width;
     out->height = e->height;
     return true;
-fail:
-    if (fd >= 0) close(fd);
-    gl_imported_free(out);
-    return false;
 }
 
 void gl_imported_free(gl_imported *im) {
-    if (im->texture) glDeleteTextures(1, &im->texture);
-    if (im->memory) glDeleteMemoryObjectsEXT(1, &im->memory);
+    lumi_gl_release_import(&im->memory, &im->texture);
     memset(im, 0, sizeof *im);
 }

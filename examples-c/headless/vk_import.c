@@ -6,6 +6,8 @@
  * must match the release's), VkMemoryDedicatedAllocateInfo for dedicated exports. */
 #include "vk_import.h"
 
+#include "lumiview_vulkan.h"
+
 #include <stdatomic.h>
 #include <stdio.h>
 #include <string.h>
@@ -268,95 +270,14 @@ static void import_free(vk_host *h, import *im) {
     memset(im, 0, sizeof *im);
 }
 
-/* Creates the image and imports the fd into its memory. Consumes `fd` in every case. */
+/* Creates the image and imports the fd into its memory (lumiview_vulkan.h). Consumes `fd` in every
+ * case. */
 static bool import_image(vk_host *h, const lumi_export *e, import *im) {
-    int fd = e->fd;
-    VkFormat format = (VkFormat)e->vk_format;
-    VkImageUsageFlags usage = (VkImageUsageFlags)e->vk_usage;
-    /* Can this device import such an image at all? */
-    VkPhysicalDeviceExternalImageFormatInfo ext_info = {
-        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_EXTERNAL_IMAGE_FORMAT_INFO,
-        .handleType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT,
-    };
-    VkPhysicalDeviceImageFormatInfo2 fmt_info = {
-        .sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_IMAGE_FORMAT_INFO_2,
-        .pNext = &ext_info,
-        .format = format,
-        .type = VK_IMAGE_TYPE_2D,
-        .tiling = (VkImageTiling)e->vk_tiling,
-        .usage = usage,
-    };
-    VkExternalImageFormatProperties ext_props = {.sType = VK_STRUCTURE_TYPE_EXTERNAL_IMAGE_FORMAT_PROPERTIES};
-    VkImageFormatProperties2 fmt_props = {.sType = VK_STRUCTURE_TYPE_IMAGE_FORMAT_PROPERTIES_2, .pNext = &ext_props};
-    VkResult r = vkGetPhysicalDeviceImageFormatProperties2(h->physical, &fmt_info, &fmt_props);
-    if (!vk_ok(r, "vkGetPhysicalDeviceImageFormatProperties2 (opaque-fd import)")) goto fail;
-    VkExternalMemoryFeatureFlags features = ext_props.externalMemoryProperties.externalMemoryFeatures;
-    if (!(features & VK_EXTERNAL_MEMORY_FEATURE_IMPORTABLE_BIT)) {
-        fprintf(stderr, "vulkan host: format %d with usage 0x%x cannot be imported from an opaque fd\n",
-                (int)format, (unsigned)usage);
-        goto fail;
-    }
-    if ((features & VK_EXTERNAL_MEMORY_FEATURE_DEDICATED_ONLY_BIT) && !e->dedicated) {
-        fprintf(stderr, "vulkan host: the driver needs a dedicated import but the export is not dedicated\n");
-        goto fail;
-    }
-    VkExternalMemoryImageCreateInfo ext_create = {
-        .sType = VK_STRUCTURE_TYPE_EXTERNAL_MEMORY_IMAGE_CREATE_INFO,
-        .handleTypes = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT,
-    };
-    VkImageCreateInfo ici = {
-        .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
-        .pNext = &ext_create,
-        .imageType = VK_IMAGE_TYPE_2D,
-        .format = format,
-        .extent = {e->width, e->height, 1},
-        .mipLevels = 1,
-        .arrayLayers = 1,
-        .samples = VK_SAMPLE_COUNT_1_BIT,
-        .tiling = (VkImageTiling)e->vk_tiling,
-        .usage = usage,
-        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
-        .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-    };
-    if (!vk_ok(vkCreateImage(h->device, &ici, NULL, &im->image), "vkCreateImage (import)")) goto fail;
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(h->device, im->image, &req);
-    if (req.size > e->allocation_size) {
-        fprintf(stderr, "vulkan host: the image needs %llu bytes but the export has %llu\n",
-                (unsigned long long)req.size, (unsigned long long)e->allocation_size);
-        goto fail;
-    }
-    /* An opaque-fd import must use the exporter's memory type (same physical device and driver). */
-    uint32_t type = e->vk_memory_type_index;
-    if (type >= 32 || !(req.memoryTypeBits & (1u << type))) {
-        fprintf(stderr, "vulkan host: the exporter's memory type %u does not fit the imported image (bits 0x%x)\n",
-                type, req.memoryTypeBits);
-        goto fail;
-    }
-    VkMemoryDedicatedAllocateInfo dedicated = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_DEDICATED_ALLOCATE_INFO,
-        .image = im->image,
-    };
-    VkImportMemoryFdInfoKHR import_info = {
-        .sType = VK_STRUCTURE_TYPE_IMPORT_MEMORY_FD_INFO_KHR,
-        .pNext = e->dedicated ? &dedicated : NULL,
-        .handleType = VK_EXTERNAL_MEMORY_HANDLE_TYPE_OPAQUE_FD_BIT,
-        .fd = fd,
-    };
-    VkMemoryAllocateInfo mai = {
-        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
-        .pNext = &import_info,
-        .allocationSize = e->allocation_size,
-        .memoryTypeIndex = type,
-    };
-    if (!vk_ok(vkAllocateMemory(h->device, &mai, NULL, &im->image_memory), "vkAllocateMemory (fd import)"))
-        goto fail;
-    fd = -1; /* a successful import owns the fd */
-    if (!vk_ok(vkBindImageMemory(h->device, im->image, im->image_memory, 0), "vkBindImageMemory")) return false;
-    return true;
-fail:
-    if (fd >= 0) close(fd);
-    return false;
+    VkResult r = lumi_vk_import(h->physical, h->device, e, &im->image, &im->image_memory);
+    if (r == VK_ERROR_FORMAT_NOT_SUPPORTED)
+        fprintf(stderr, "vulkan host: format %d with usage 0x%x cannot be imported from an opaque fd here\n",
+                (int)e->vk_format, (unsigned)e->vk_usage);
+    return vk_ok(r, "lumi_vk_import (opaque-fd image import)");
 }
 
 static bool create_readback_buffer(vk_host *h, VkDeviceSize size, import *im) {
@@ -400,21 +321,9 @@ static bool record_copy(vk_host *h, const lumi_export *e, VkImageAspectFlags asp
         .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
     };
     if (!vk_ok(vkBeginCommandBuffer(im->cmd, &begin), "vkBeginCommandBuffer")) return false;
-    VkImageSubresourceRange range = {aspect, 0, 1, 0, 1};
     /* Acquire: the other half of lumiview's release (same layouts, queue families swapped). */
-    VkImageMemoryBarrier acquire = {
-        .sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER,
-        .srcAccessMask = 0,
-        .dstAccessMask = VK_ACCESS_TRANSFER_READ_BIT,
-        .oldLayout = (VkImageLayout)e->vk_layout,
-        .newLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-        .srcQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL,
-        .dstQueueFamilyIndex = h->queue_family,
-        .image = im->image,
-        .subresourceRange = range,
-    };
-    vkCmdPipelineBarrier(im->cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 0, NULL,
-                         0, NULL, 1, &acquire);
+    lumi_vk_cmd_acquire(im->cmd, e, im->image, h->queue_family, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                        VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT);
     VkBufferImageCopy copy = {
         .bufferOffset = 0,
         .bufferRowLength = 0, /* tightly packed */
@@ -424,18 +333,9 @@ static bool record_copy(vk_host *h, const lumi_export *e, VkImageAspectFlags asp
         .imageExtent = {e->width, e->height, 1},
     };
     vkCmdCopyImageToBuffer(im->cmd, im->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, im->buffer, 1, &copy);
-    /* Release back to the exporter in the layout its next acquire expects. */
-    VkImageMemoryBarrier release = {
-        .sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER,
-        .srcAccessMask = 0, /* reads need no availability operation */
-        .dstAccessMask = 0,
-        .oldLayout = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
-        .newLayout = (VkImageLayout)e->vk_layout,
-        .srcQueueFamilyIndex = h->queue_family,
-        .dstQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL,
-        .image = im->image,
-        .subresourceRange = range,
-    };
+    /* Release back to the exporter in the layout its next acquire expects (reads: no access). */
+    lumi_vk_cmd_release(im->cmd, e, im->image, h->queue_family, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                        VK_PIPELINE_STAGE_TRANSFER_BIT, 0);
     VkBufferMemoryBarrier to_host = {
         .sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER,
         .srcAccessMask = VK_ACCESS_TRANSFER_WRITE_BIT,
@@ -446,8 +346,6 @@ static bool record_copy(vk_host *h, const lumi_export *e, VkImageAspectFlags asp
         .offset = 0,
         .size = VK_WHOLE_SIZE,
     };
-    vkCmdPipelineBarrier(im->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0, NULL,
-                         0, NULL, 1, &release);
     vkCmdPipelineBarrier(im->cmd, VK_PIPELINE_STAGE_TRANSFER_BIT, VK_PIPELINE_STAGE_HOST_BIT, 0, 0, NULL, 1,
                          &to_host, 0, NULL);
     return vk_ok(vkEndCommandBuffer(im->cmd), "vkEndCommandBuffer");
@@ -473,8 +371,7 @@ bool vk_host_read_export(vk_host *host, const lumi_export *exp, void *out, size_
         if (exp->fd >= 0) close(exp->fd);
         return false;
     }
-    VkImageAspectFlags aspect =
-        exp->vk_format == VK_FORMAT_D32_SFLOAT ? VK_IMAGE_ASPECT_DEPTH_BIT : VK_IMAGE_ASPECT_COLOR_BIT;
+    VkImageAspectFlags aspect = lumi_vk_aspect(exp);
     bool ok = import_image(host, exp, &im) && create_readback_buffer(host, need, &im) &&
               record_copy(host, exp, aspect, &im);
     if (ok) {
