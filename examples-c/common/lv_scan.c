@@ -96,8 +96,12 @@ bool lv_scan_ensure(const char *repo_root, lv_scan_files *out) {
     int c = snprintf(out->pack, sizeof out->pack, "%s/%s-%s-%s.lvpack", dir, LV_SCAN_LUMINAIRE, LV_SCAN_LAYOUT,
                      LV_SCAN_SIZE);
     int d = snprintf(out->proxy, sizeof out->proxy, "%s/%s-proxy.glb", dir, LV_SCAN_LUMINAIRE);
-    /* $LUMIVIEW_CLI, else the debug CLI, else the release one (after only `cargo build --release`). */
+    /* $LUMIVIEW_CLI, else the installed package's CLI (examples built with find_package), else the
+     * debug CLI, else the release one (after only `cargo build --release`). */
     const char *env_cli = getenv("LUMIVIEW_CLI");
+#ifdef LUMIVIEW_CLI_PATH
+    if (!(env_cli && env_cli[0])) env_cli = LUMIVIEW_CLI_PATH;
+#endif
     int e = env_cli && env_cli[0] ? snprintf(cli, sizeof cli, "%s", env_cli)
                                   : snprintf(cli, sizeof cli, "%s/target/debug/lumiview", repo_root);
     if (!(env_cli && env_cli[0]) && e >= 0 && (size_t)e < sizeof cli && access(cli, X_OK) != 0)
