@@ -169,7 +169,7 @@ fn nearer_instance_occludes_and_bottom_left_origin_flips_rows() {
     );
     r.remove_instance(near).unwrap();
     assert!(r.set_transform(near, Mat4::IDENTITY).is_err(), "stale instance id");
-    // Move the luminaire up in the image (world +Y is image up for this camera? check both origins).
+    // Move the luminaire up in the image (world +Y is eye-space +y for this camera), both origins.
     r.set_transform(lumiview::gpu::InstanceId(1), Mat4::IDENTITY).ok();
     let shifted = Mat4::from_translation(Vec3::new(0.0, 0.25, 0.0));
     let ids: Vec<_> = (1..=2)
@@ -187,6 +187,13 @@ fn nearer_instance_occludes_and_bottom_left_origin_flips_rows() {
     };
     r.render(&mut t, &cam, &RenderOptions::default()).unwrap();
     let top = rows_with_signal(&mut t, &mut r);
+    // Clip +y is image up (docs/ffi-conventions.md, "The camera"): the luminaire moved to world +Y,
+    // eye-space +y for this camera, lies in the upper half, the low memory rows with TopLeft.
+    let centroid = top.iter().sum::<usize>() as f64 / top.len().max(1) as f64;
+    assert!(
+        centroid < 15.0,
+        "rows {top:?}: the luminaire above the view axis is not in the upper half"
+    );
     cam.origin = Origin::BottomLeft;
     r.render(&mut t, &cam, &RenderOptions::default()).unwrap();
     let bottom = rows_with_signal(&mut t, &mut r);

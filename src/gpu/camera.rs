@@ -99,6 +99,41 @@ impl HostCamera {
         }
     }
 
+    /// Whether drawing in a frame whose transform to world is `model` reverses the screen winding
+    /// of triangles, compared with an unmirrored view: a triangle counter-clockwise as seen from the
+    /// eye is then clockwise in wgpu's NDC. A y-flipping `Origin::BottomLeft`, a mirrored model or
+    /// view (negative determinant) and a mirrored projection each reverse it; two reversals cancel.
+    /// Hardware face culling must swap front and back when this is true. Measured, not derived from
+    /// the matrices' signs, so any projection works: a small triangle facing the eye around the
+    /// point that projects to the centre of the image (NDC (0, 0, 0.5), inside every frustum) is
+    /// projected and its signed area read.
+    pub fn mirrors_winding(&self, model: Mat4) -> bool {
+        let clip_from_local = self.clip_from_world() * model;
+        let local_from_clip = clip_from_local.inverse();
+        let p0 = local_from_clip.project_point3(Vec3::new(0.0, 0.0, 0.5));
+        let eye = self.eye_in(model);
+        let towards_eye = if eye.w > 0.5 {
+            eye.truncate() - p0
+        } else {
+            eye.truncate()
+        }
+        .normalize_or_zero();
+        if towards_eye == Vec3::ZERO || !p0.is_finite() {
+            return false;
+        }
+        // u ⟂ t and v = t × u, so (u × v)·t > 0: the triangle p0, p0 + εu, p0 + εv faces the eye and
+        // is counter-clockwise seen from it.
+        let u = towards_eye.any_orthonormal_vector();
+        let v = towards_eye.cross(u);
+        let eps = 1e-3 * (eye.truncate() - p0).length().max(1e-3);
+        let ndc = |p: Vec3| {
+            let c = clip_from_local * p.extend(1.0);
+            glam::Vec2::new(c.x / c.w, c.y / c.w)
+        };
+        let (a, b, c) = (ndc(p0), ndc(p0 + eps * u), ndc(p0 + eps * v));
+        (b - a).perp_dot(c - a) < 0.0
+    }
+
     /// The camera of a pinhole view given like a capture camera (position, OpenCV basis right /
     /// down / forward, intrinsics in pixels; luminaire frame = world), as a GL-convention host
     /// camera with a top-left origin, so that target row 0 is image row 0 and pixel (u, v) of the
@@ -219,5 +254,157 @@ mod tests {
             ..cam
         };
         assert_eq!(ortho.eye_in(Mat4::IDENTITY), Vec4::new(0.0, 0.0, 1.0, 0.0));
+    }
+
+    /// A right-handed (`lh` false: looking down eye −Z) or left-handed (eye +Z) look-at view.
+    fn look_at(eye: Vec3, target: Vec3, up: Vec3, lh: bool) -> Mat4 {
+        let f = (target - eye).normalize();
+        let (s, z) = if lh {
+            (up.cross(f).normalize(), f)
+        } else {
+            (f.cross(up).normalize(), -f)
+        };
+        let u = z.cross(s);
+        Mat4::from_cols(
+            Vec4::new(s.x, u.x, z.x, 0.0),
+            Vec4::new(s.y, u.y, z.y, 0.0),
+            Vec4::new(s.z, u.z, z.z, 0.0),
+            Vec4::new(-s.dot(eye), -u.dot(eye), -z.dot(eye), 1.0),
+        )
+    }
+
+    /// Perspective projections: GL (right-handed, clip z −w…w), Vulkan (right-handed, 0…w) and
+    /// D3D-style left-handed (0…w), fovy 1 rad, aspect 1.5, 0.1…100 m.
+    fn perspective(kind: &str) -> Mat4 {
+        let (f, a, n, far) = (1.0 / 0.5f32.tan(), 1.5f32, 0.1f32, 100.0f32);
+        let (z, w) = match kind {
+            "gl" => (
+                Vec4::new(0.0, 0.0, (far + n) / (n - far), -1.0),
+                Vec4::new(0.0, 0.0, 2.0 * far * n / (n - far), 0.0),
+            ),
+            "vk" => (
+                Vec4::new(0.0, 0.0, far / (n - far), -1.0),
+                Vec4::new(0.0, 0.0, n * far / (n - far), 0.0),
+            ),
+            _ => (
+                Vec4::new(0.0, 0.0, far / (far - n), 1.0),
+                Vec4::new(0.0, 0.0, -n * far / (far - n), 0.0),
+            ),
+        };
+        Mat4::from_cols(Vec4::new(f / a, 0.0, 0.0, 0.0), Vec4::new(0.0, f, 0.0, 0.0), z, w)
+    }
+
+    /// A GL perspective camera at `eye` looking at the origin (+Z up).
+    fn looking_at_origin(eye: Vec3, origin: Origin, depth_range: DepthRange) -> HostCamera {
+        HostCamera {
+            view: look_at(eye, Vec3::ZERO, Vec3::Z, false),
+            projection: perspective("gl"),
+            depth_range,
+            reversed_z: false,
+            origin,
+        }
+    }
+
+    #[test]
+    fn winding_reverses_with_each_mirror_and_not_with_two() {
+        let mirror_x = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+        for eye in [
+            Vec3::new(0.3, -0.4, -2.0),
+            Vec3::new(0.05, 0.02, 0.03),
+            Vec3::new(3.0, 1.0, 0.5),
+        ] {
+            let gl_top = looking_at_origin(eye, Origin::TopLeft, DepthRange::NegOneToOne);
+            let gl_bottom = HostCamera {
+                origin: Origin::BottomLeft,
+                ..gl_top
+            };
+            assert!(!gl_top.mirrors_winding(Mat4::IDENTITY), "eye {eye}");
+            assert!(
+                gl_bottom.mirrors_winding(Mat4::IDENTITY),
+                "eye {eye}: BottomLeft flips y"
+            );
+            assert!(gl_top.mirrors_winding(mirror_x), "eye {eye}: a mirrored model");
+            assert!(!gl_bottom.mirrors_winding(mirror_x), "eye {eye}: two mirrors cancel");
+            // A Vulkan host's y-flipped 0…1 projection: upside down with TopLeft (mirrored), the
+            // right way up with BottomLeft, whose flip undoes it (docs/ffi-conventions.md).
+            let mut vk = perspective("vk");
+            vk.y_axis.y = -vk.y_axis.y;
+            let vk_top = HostCamera {
+                projection: vk,
+                depth_range: DepthRange::ZeroToOne,
+                ..gl_top
+            };
+            let vk_bottom = HostCamera {
+                origin: Origin::BottomLeft,
+                ..vk_top
+            };
+            assert!(vk_top.mirrors_winding(Mat4::IDENTITY), "eye {eye}");
+            assert!(!vk_bottom.mirrors_winding(Mat4::IDENTITY), "eye {eye}");
+            let (a, b) = (vk_bottom.clip_from_world(), {
+                let mut unflipped = vk;
+                unflipped.y_axis.y = -unflipped.y_axis.y;
+                HostCamera {
+                    projection: unflipped,
+                    ..vk_top
+                }
+                .clip_from_world()
+            });
+            assert!(a.abs_diff_eq(b, 1e-6), "flipped + BottomLeft = unflipped + TopLeft");
+            // A left-handed view and projection (D3D's LookAtLH and PerspectiveFovLH) on the
+            // right-handed luminaire frame: the image is a mirror image (eye x points left).
+            let lh = HostCamera {
+                view: look_at(eye, Vec3::ZERO, Vec3::Z, true),
+                projection: perspective("lh"),
+                depth_range: DepthRange::ZeroToOne,
+                ..gl_top
+            };
+            assert!(
+                lh.mirrors_winding(Mat4::IDENTITY),
+                "eye {eye}: left-handed view + projection"
+            );
+            assert!(
+                !HostCamera {
+                    origin: Origin::BottomLeft,
+                    ..lh
+                }
+                .mirrors_winding(Mat4::IDENTITY),
+                "eye {eye}: left-handed, flipped back by BottomLeft"
+            );
+            // Orthographic.
+            let ortho = HostCamera {
+                projection: Mat4::from_cols(
+                    Vec4::X,
+                    Vec4::Y,
+                    Vec4::new(0.0, 0.0, -2.0 / 9.9, 0.0),
+                    Vec4::new(0.0, 0.0, -10.1 / 9.9, 1.0),
+                ),
+                ..gl_top
+            };
+            assert!(!ortho.mirrors_winding(Mat4::IDENTITY), "eye {eye}: orthographic");
+            assert!(
+                HostCamera {
+                    origin: Origin::BottomLeft,
+                    ..ortho
+                }
+                .mirrors_winding(Mat4::IDENTITY),
+                "eye {eye}: orthographic, BottomLeft"
+            );
+        }
+    }
+
+    #[test]
+    fn clip_y_up_is_image_up_for_both_origins() {
+        // A point above the view axis (eye-space +y) lands in the upper half of the image: NDC y > 0
+        // in wgpu (row 0 at the top) with TopLeft, and mirrored into the rows near the bottom of
+        // memory order with BottomLeft (NDC y < 0 in wgpu's clip space, row height − 1 side).
+        let cam = looking_at_origin(Vec3::new(0.0, -3.0, 0.0), Origin::TopLeft, DepthRange::NegOneToOne);
+        let above = cam.clip_from_world() * Vec4::new(0.0, 0.0, 0.5, 1.0); // world +Z is eye +y here
+        assert!(above.y / above.w > 0.1, "{above}");
+        let bottom = HostCamera {
+            origin: Origin::BottomLeft,
+            ..cam
+        };
+        let b = bottom.clip_from_world() * Vec4::new(0.0, 0.0, 0.5, 1.0);
+        assert!(b.y / b.w < -0.1, "{b}");
     }
 }

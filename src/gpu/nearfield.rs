@@ -1147,8 +1147,14 @@ impl NearfieldPass {
                         None,
                     )
                 }
-                (false, None, true) => (DrawGeometry::Box, Some(wgpu::Face::Back)),
-                (false, None, false) => (DrawGeometry::Box, Some(wgpu::Face::Front)),
+                // The box mesh is counter-clockwise from outside: from outside draw its front
+                // faces, from inside its back faces, swapped when the host's camera (a y-flipping
+                // BottomLeft origin) or the model mirrors the winding.
+                (false, None, outside) => {
+                    let front = outside != camera.mirrors_winding(*model);
+                    let cull = if front { wgpu::Face::Back } else { wgpu::Face::Front };
+                    (DrawGeometry::Box, Some(cull))
+                }
             };
             draws.push((slots.len(), lum.clone(), geometry, mode, cull));
             slots.push(DrawUniform {
