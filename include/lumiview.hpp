@@ -482,15 +482,11 @@ public:
     /// Reads one image back (`which` as for `export_image`): rows of width × bytes per pixel
     /// (RGBA16F 8, RGBA32F 16, RGBA8 4, depth 4), memory row 0 first (the row `lumi_camera.origin`
     /// names), little-endian. Fails before the first render. Wraps `lumi_target_read_pixels`: a size
-    /// query through `LUMI_STATUS_BUFFER_TOO_SMALL` (with a 0-byte, non-NULL buffer: the C call
-    /// refuses NULL), then the read.
+    /// query (NULL buffer), then the read.
     std::vector<uint8_t> read_pixels(uint32_t which) {
         lumi_context *ctx = h_.live_ctx("lumi::target::read_pixels");
-        uint8_t none = 0;
         size_t need = 0;
-        const lumi_status query = lumi_target_read_pixels(ctx, h_.handle(), which, &none, 0, &need);
-        if (query == LUMI_STATUS_OK) return std::vector<uint8_t>();  // a 0-byte image
-        if (query != LUMI_STATUS_BUFFER_TOO_SMALL) detail::check(query);
+        detail::check(lumi_target_read_pixels(ctx, h_.handle(), which, nullptr, 0, &need));
         std::vector<uint8_t> pixels(need);
         size_t written = 0;
         detail::check(

@@ -18,7 +18,7 @@
  * `lumi_render` into the same target.
  *
  * The barriers are the two halves of the queue-family ownership transfers documented in
- * docs/interop.md ("Vulkan hosts"): lumiview releases each image to VK_QUEUE_FAMILY_EXTERNAL in
+ * docs/interop.md ("Importing into Vulkan"): lumiview releases each image to VK_QUEUE_FAMILY_EXTERNAL in
  * `e.vk_layout` (VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL); the host acquires it with the same
  * oldLayout, uses it, and releases it back in `e.vk_layout`, which lumiview's next frame acquires.
  *
@@ -201,10 +201,12 @@ static inline void lumi_vk_release_import(VkDevice device, VkImage *image, VkDev
 }
 
 /* Records the acquire of an imported image from lumiview: a queue-family ownership transfer from
- * VK_QUEUE_FAMILY_EXTERNAL to `queue_family`, layout `e->vk_layout` → `new_layout`; source stage
- * TOP_OF_PIPE with no access (lumiview's release made its writes available, and `lumi_render`
- * returned or its `render_done` semaphore was waited on), destination `dst_stage` / `dst_access`
- * (e.g. FRAGMENT_SHADER / SHADER_READ to sample it, TRANSFER / TRANSFER_READ to copy it). */
+ * VK_QUEUE_FAMILY_EXTERNAL to `queue_family`, layout `e->vk_layout` → `new_layout`, with no source
+ * access (lumiview's release made its writes available) and destination `dst_stage` / `dst_access`
+ * (e.g. FRAGMENT_SHADER / SHADER_READ to sample it, TRANSFER / TRANSFER_READ to copy it). The
+ * source stage is `dst_stage` too: with semaphores, wait on `render_done` at `dst_stage`
+ * (VkSubmitInfo.pWaitDstStageMask) and the wait and this barrier form one dependency chain; without
+ * them `lumi_render` has returned and the GPU finished the frame. */
 static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t queue_family,
                                        VkImageLayout new_layout, VkPipelineStageFlags dst_stage,
                                        VkAccessFlags dst_access) {
@@ -221,7 +223,7 @@ static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e
     b.subresourceRange.aspectMask = lumi_vk_aspect(e);
     b.subresourceRange.levelCount = 1;
     b.subresourceRange.layerCount = 1;
-    vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
+    vkCmdPipelineBarrier(cmd, dst_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
 }
 
 /* Records the release of an imported image back to lumiview after the host's use: ownership from

@@ -295,6 +295,17 @@ fn lifecycle_errors_and_a_render_through_the_c_api() {
             ),
             LUMI_STATUS_INVALID_ARGUMENT
         );
+        // ... but a size query (NULL buffer) is not.
+        let mut size = 0usize;
+        assert_eq!(
+            lumi_target_read_pixels(ctx, target, LUMI_ATTACHMENT_COLOR, ptr::null_mut(), 0, &mut size),
+            LUMI_STATUS_OK
+        );
+        assert_eq!(size, px.len());
+        assert_eq!(
+            lumi_target_read_pixels(ctx, target, LUMI_ATTACHMENT_COLOR, ptr::null_mut(), 0, ptr::null_mut()),
+            LUMI_STATUS_NULL_POINTER
+        );
 
         // Render: bad camera enums, NaN matrix, then a good frame.
         let eye = Vec3::new(0.0, 0.0, -3.0);

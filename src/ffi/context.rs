@@ -138,7 +138,8 @@ pub extern "C" fn lumi_context_desc_default() -> lumi_context_desc {
 ///   written only on success.
 ///
 /// Errors: `LUMI_STATUS_ABI_MISMATCH` (desc->abi_version differs), `LUMI_STATUS_NO_DEVICE`,
-/// `LUMI_STATUS_GPU`, `LUMI_STATUS_NULL_POINTER` (out).
+/// `LUMI_STATUS_UNSUPPORTED` (fewer than 16 storage buffers per shader stage), `LUMI_STATUS_GPU`,
+/// `LUMI_STATUS_OUT_OF_MEMORY`, `LUMI_STATUS_NULL_POINTER` (out).
 ///
 /// # Safety
 /// `desc` is NULL or points to a valid descriptor; `out` points to writable storage.
@@ -203,7 +204,8 @@ pub unsafe extern "C" fn lumi_context_create(
     )
 }
 
-/// Destroys a context and everything it owns (luminaires, instances, targets). Waits for the GPU.
+/// Destroys a context and everything it owns (luminaires, instances, targets). Waits for the GPU
+/// (not once a panic has poisoned the context).
 /// NULL is ignored. Exported fds already handed out stay valid (the host owns them).
 ///
 /// # Safety

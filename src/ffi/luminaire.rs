@@ -63,7 +63,7 @@ impl TryFrom<u32> for SelectionArg {
 pub const LUMI_OPENING_POINT: u32 = 0;
 /// Flat rectangle (extents X × Y).
 pub const LUMI_OPENING_RECTANGLE: u32 = 1;
-/// Box with luminous sides.
+/// Box with luminous sides, centred on the photometric centre (z from −Z/2 to +Z/2).
 pub const LUMI_OPENING_BOX: u32 = 2;
 /// Flat ellipse / disc.
 pub const LUMI_OPENING_ELLIPSE: u32 = 3;
@@ -79,9 +79,9 @@ pub const LUMI_OPENING_HORIZONTAL_CYLINDER_Y: u32 = 7;
 pub const LUMI_OPENING_VERTICAL_ELLIPSE_C0: u32 = 8;
 /// Vertical ellipse facing C90.
 pub const LUMI_OPENING_VERTICAL_ELLIPSE_C90: u32 = 9;
-/// EULUMDAT rectangle with side heights.
+/// EULUMDAT rectangle in z = 0 with luminous side walls rising from it (+Z) to their heights.
 pub const LUMI_OPENING_RECTANGLE_WITH_SIDES: u32 = 10;
-/// EULUMDAT disc with side heights.
+/// EULUMDAT disc in z = 0 with a luminous side wall rising from it (+Z) to its height.
 pub const LUMI_OPENING_DISC_WITH_SIDES: u32 = 11;
 
 /// Facts about a luminaire. Units: cd, lm, m. The far-field fields (`max_intensity_cd` …
@@ -104,7 +104,9 @@ pub struct lumi_luminaire_info {
     /// One of `LUMI_OPENING_*`.
     pub opening_shape: u32,
     /// Opening extents along X (C0–C180), Y (C90–C270) and Z, metres. An IES file's length is X,
-    /// its width Y; an EULUMDAT file's width is X, its length Y (docs/conventions.md).
+    /// its width Y; an EULUMDAT file's width is X, its length Y (docs/conventions.md). For the
+    /// `_WITH_SIDES` shapes Z is the tallest side height. Where each shape sits relative to the
+    /// photometric centre: docs/conventions.md, "Where the opening sits".
     pub opening_size_m: [f64; 3],
     /// Housing extents along X, Y and Z in metres (EULUMDAT luminaire dimensions: width along X,
     /// length along Y); all 0 when the file gives none.
@@ -187,9 +189,9 @@ pub const LUMI_LUT_U8: u32 = 2;
 pub struct lumi_lut_desc {
     /// `LUMI_LUT_2D` (C × γ) or `LUMI_LUT_1D` (over cos γ).
     pub kind: u32,
-    /// Texels along C (2D) or cos γ (1D), ≥ 2.
+    /// Texels along C (2D) or cos γ (1D), 2…8192.
     pub width: u32,
-    /// Texels along γ (2D; ignored for 1D), ≥ 2.
+    /// Texels along γ (2D; ignored for 1D), 2…8192.
     pub height: u32,
     /// Divide by the maximum intensity (values 0…1) instead of absolute cd.
     pub normalize: bool,

@@ -101,6 +101,7 @@ impl From<GpuError> for FfiError {
             GpuError::Interop(crate::interop::InteropError::NoAdapter(_)) => LUMI_STATUS_NO_DEVICE,
             GpuError::Interop(crate::interop::InteropError::Unsupported(_)) => LUMI_STATUS_UNSUPPORTED,
             GpuError::Interop(crate::interop::InteropError::Vulkan(_)) => LUMI_STATUS_GPU,
+            GpuError::Interop(crate::interop::InteropError::OutOfMemory(_)) => LUMI_STATUS_OUT_OF_MEMORY,
             GpuError::Photometry(p) => photometry_status(p),
             GpuError::Nearfield(n) => nearfield_status(n),
         };

@@ -25,20 +25,25 @@ pub const LUMI_OVERLAY_SOLID: u32 = 1;
 /// Overlay bit: housing box from the file's luminaire dimensions (blue), where it has them.
 pub const LUMI_OVERLAY_HOUSING: u32 = 2;
 
-/// The host's camera for one frame.
+/// The host's camera for one frame. Conventions, with a worked GL and Vulkan projection:
+/// docs/ffi-conventions.md, "The camera".
 #[repr(C)]
 #[derive(Debug, Clone, Copy)]
 pub struct lumi_camera {
     /// World → eye, column-major (glm / GL layout).
     pub view: [f32; 16],
-    /// Eye → clip, column-major, in the host's own convention.
+    /// Eye → clip, column-major; clip +y is image up for either `origin` (GL's convention). A
+    /// Vulkan projection with y flipped (`proj[1][1] *= -1`) is un-flipped, or passed with
+    /// `LUMI_ORIGIN_BOTTOM_LEFT`, whose flip undoes it.
     pub projection: [f32; 16],
     /// `LUMI_DEPTH_RANGE_*`: the host's clip depth range; depth is written the way the host's own
     /// depth buffer would hold it (GL: window depth (z_ndc + 1)/2).
     pub depth_range: u32,
-    /// Near maps to 1 and far to 0 (depth test GREATER, cleared to 0).
+    /// The projection maps near to 1 and far to 0: depth test GREATER, depth cleared to 0 (not
+    /// checked against the projection).
     pub reversed_z: bool,
-    /// `LUMI_ORIGIN_*`: which image row is memory row 0.
+    /// `LUMI_ORIGIN_*`: which image row is memory row 0 (the top for `TOP_LEFT`, the bottom for
+    /// `BOTTOM_LEFT`); it mirrors the rows and changes nothing else.
     pub origin: u32,
 }
 
@@ -134,7 +139,15 @@ fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
 /// The host must finish its reads of this target (glFinish or a fence) before the next
 /// `lumi_render` into it; two targets used in turn avoid the stall.
 ///
-/// - `options` may be NULL for the defaults.
+/// - `camera`: required; its matrices finite and invertible.
+/// - `options`: NULL for the defaults (`lumi_render_options_default()`: luminance output, which an
+///   RGBA8 sRGB target refuses).
+///
+/// Errors: `LUMI_STATUS_NULL_POINTER` (`camera`), `LUMI_STATUS_INVALID_ARGUMENT` (a NaN, infinite
+/// or singular matrix, an unknown enum value or overlay bit, an exposure or solid radius not > 0,
+/// an output the target's format cannot hold, a stale handle, a near-field view needing more than
+/// the luminaire's budget), `LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`,
+/// `LUMI_STATUS_OUT_OF_MEMORY`; per case: docs/ffi-conventions.md, "Statuses by function".
 ///
 /// # Safety
 /// `ctx` is a live context; `camera` valid; `options` NULL or valid.
@@ -142,19 +155,19 @@ fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
 pub unsafe extern "C" fn lumi_render(
     ctx: *mut lumi_context,
     target: super::target::lumi_target,
-    cam: *const lumi_camera,
-    opts: *const lumi_render_options,
+    camera: *const lumi_camera,
+    options: *const lumi_render_options,
 ) -> lumi_status {
     // SAFETY: forwarded contract.
     unsafe {
         with_context("lumi_render", ctx, |c| {
-            let Some(cam) = cam.as_ref() else {
+            let Some(cam) = camera.as_ref() else {
                 return Err(FfiError::null("camera"));
             };
-            let cam = camera(cam)?;
-            let o = match opts.as_ref() {
-                Some(o) => options(o)?,
-                None => options(&lumi_render_options_default())?,
+            let cam = self::camera(cam)?;
+            let o = match options.as_ref() {
+                Some(o) => self::options(o)?,
+                None => self::options(&lumi_render_options_default())?,
             };
             target_mut(c, target)?;
             let ContextInner { renderer, targets, .. } = c;

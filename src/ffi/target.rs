@@ -49,8 +49,9 @@ pub struct lumi_target_desc {
     /// read-back-only targets.
     pub exportable: bool,
     /// Synchronise with the host on the GPU through two exported semaphores (needs
-    /// `external_semaphore` in `lumi_device_caps`; `LUMI_STATUS_UNSUPPORTED` otherwise). Then
-    /// `lumi_render` returns without waiting: see `lumi_target_export_semaphores`.
+    /// `external_semaphore` in `lumi_device_caps`; `LUMI_STATUS_UNSUPPORTED` otherwise) and
+    /// `exportable` (`LUMI_STATUS_INVALID_ARGUMENT` otherwise). Then `lumi_render` returns
+    /// without waiting: see `lumi_target_export_semaphores`.
     pub semaphores: bool,
 }
 
@@ -148,8 +149,10 @@ pub(crate) fn check_target(c: &ContextInner, t: lumi_target) -> Result<(), FfiEr
 
 /// Creates a render target. `out` is written only on success.
 ///
-/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` (size, unknown format), `LUMI_STATUS_UNSUPPORTED`
-/// (exportable without external memory, or a format the driver cannot export).
+/// Errors: `LUMI_STATUS_NULL_POINTER` (`desc`, `out`), `LUMI_STATUS_INVALID_ARGUMENT` (size,
+/// unknown format, `semaphores` without `exportable`), `LUMI_STATUS_UNSUPPORTED` (exportable
+/// without external memory, semaphores without external semaphores, or a format the driver cannot
+/// export), `LUMI_STATUS_GPU`, `LUMI_STATUS_OUT_OF_MEMORY`.
 ///
 /// # Safety
 /// `ctx` is a live context; `desc` valid; `out` writable.
@@ -187,7 +190,9 @@ pub unsafe extern "C" fn lumi_target_create(
 }
 
 /// Frees a target (waits for the GPU). Handle 0 is ignored; a stale handle is an error. Memory a
-/// host imported stays valid until the host releases its import.
+/// host imported stays valid until the host releases its import. The target is freed even when
+/// the wait reports an error an earlier call left (`LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`),
+/// which is then returned.
 ///
 /// # Safety
 /// `ctx` is a live context.
@@ -200,11 +205,17 @@ pub unsafe extern "C" fn lumi_target_destroy(ctx: *mut lumi_context, target: lum
                 return Ok(());
             }
             check_target(c, target)?;
-            c.renderer.ctx.wait_idle()?;
-            c.targets
-                .remove(&target)
-                .map(|_| ())
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)")))
+            if !c.targets.contains_key(&target) {
+                return Err(FfiError::invalid(
+                    "target",
+                    format!("no target with handle {target:#x} (destroyed?)"),
+                ));
+            }
+            // The target goes whatever the wait reports (an earlier call's GPU error, a lost
+            // device): the handle is stale afterwards either way, and the error is returned.
+            let waited = c.renderer.ctx.wait_idle();
+            c.targets.remove(&target);
+            waited.map_err(FfiError::from)
         })
     }
 }
@@ -212,7 +223,12 @@ pub unsafe extern "C" fn lumi_target_destroy(ctx: *mut lumi_context, target: lum
 /// Exports one image of a target as a new opaque fd plus what the host needs to import it.
 /// Each call returns a new fd (the caller owns it). The memory row 0 is the image row the host's
 /// `origin` (in `lumi_camera`) names as first: the top row for `LUMI_ORIGIN_TOP_LEFT`, the bottom
-/// row for `LUMI_ORIGIN_BOTTOM_LEFT`.
+/// row for `LUMI_ORIGIN_BOTTOM_LEFT`. Allowed before the first render; the image holds a frame
+/// once a `lumi_render` into the target has returned.
+///
+/// Errors: `LUMI_STATUS_NULL_POINTER` (`out`), `LUMI_STATUS_INVALID_ARGUMENT` (unknown `which`,
+/// `LUMI_ATTACHMENT_DEPTH` of a `LUMI_DEPTH_NONE` target, a stale handle),
+/// `LUMI_STATUS_UNSUPPORTED` (a target created with `exportable = false`), `LUMI_STATUS_GPU`.
 ///
 /// # Safety
 /// `ctx` is a live context; `out` writable (written only on success).
@@ -268,10 +284,17 @@ pub unsafe extern "C" fn lumi_target_export(
 /// Reads one image of a target back into `buffer` for hosts without interop: rows of
 /// `width × bytes-per-pixel` bytes (RGBA16F 8, RGBA32F 16, RGBA8 4, depth 4), memory row 0 first,
 /// little-endian. `written` receives the byte count (or, on `LUMI_STATUS_BUFFER_TOO_SMALL`, the size
-/// needed). Fails before the first render.
+/// needed). With `buffer` NULL only `written` is written, the size (a size query, allowed before
+/// any render).
+///
+/// Errors: `LUMI_STATUS_NULL_POINTER` (`written`), `LUMI_STATUS_INVALID_ARGUMENT` (unknown
+/// `which`, a stale, foreign or wrong-kind handle, `LUMI_ATTACHMENT_DEPTH` of a `LUMI_DEPTH_NONE`
+/// target, or no `lumi_render` into the target yet), `LUMI_STATUS_BUFFER_TOO_SMALL`,
+/// `LUMI_STATUS_GPU`. On a target with semaphores call it only while the host holds no read in
+/// flight (it does not wait on `host_done`).
 ///
 /// # Safety
-/// `ctx` is a live context; `buffer` has `buffer_len` writable bytes; `written` writable.
+/// `ctx` is a live context; `buffer` NULL or `buffer_len` writable bytes; `written` writable.
 #[no_mangle]
 pub unsafe extern "C" fn lumi_target_read_pixels(
     ctx: *mut lumi_context,
@@ -284,9 +307,6 @@ pub unsafe extern "C" fn lumi_target_read_pixels(
     // SAFETY: forwarded contract.
     unsafe {
         with_context("lumi_target_read_pixels", ctx, |c| {
-            if buffer.is_null() {
-                return Err(FfiError::null("buffer"));
-            }
             if written.is_null() {
                 return Err(FfiError::null("written"));
             }
@@ -299,6 +319,10 @@ pub unsafe extern "C" fn lumi_target_read_pixels(
             let need = t.desc.width as usize * t.desc.height as usize * t.bytes_per_pixel(which) as usize;
             if which == Attachment::Depth && t.desc.depth == DepthFormat::None {
                 return Err(FfiError::invalid("which", "the target has no depth output"));
+            }
+            if buffer.is_null() {
+                write_out(written, need);
+                return Ok(());
             }
             if buffer_len < need {
                 write_out(written, need);

@@ -196,10 +196,13 @@ impl ExportableImage {
                 Ok(m) => m,
                 Err(e) => {
                     raw.destroy_image(image, None);
-                    return Err(InteropError::Vulkan(format!(
-                        "vkAllocateMemory ({} bytes): {e}",
-                        req.size
-                    )));
+                    let what = format!("vkAllocateMemory ({} bytes): {e}", req.size);
+                    return Err(match e {
+                        vk::Result::ERROR_OUT_OF_DEVICE_MEMORY | vk::Result::ERROR_OUT_OF_HOST_MEMORY => {
+                            InteropError::OutOfMemory(what)
+                        }
+                        _ => InteropError::Vulkan(what),
+                    });
                 }
             };
             if let Err(e) = raw.bind_image_memory(image, memory, 0) {
@@ -336,7 +339,10 @@ impl ExportableImage {
                 new_layout: self.attachment_layout,
                 src_access: vk::AccessFlags::empty(),
                 dst_access: self.attachment_access(),
-                src_stage: vk::PipelineStageFlags::TOP_OF_PIPE,
+                // ALL_COMMANDS, not TOP_OF_PIPE (no stage in a first scope): with semaphores this
+                // chains to the wait on `host_done` (at ALL_COMMANDS), so the layout transition
+                // happens after the host's release.
+                src_stage: vk::PipelineStageFlags::ALL_COMMANDS,
                 dst_stage: self.attachment_stage(),
             },
         ))

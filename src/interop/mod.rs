@@ -33,4 +33,7 @@ pub enum InteropError {
     /// A Vulkan call failed.
     #[error("Vulkan: {0}")]
     Vulkan(String),
+    /// A Vulkan allocation failed for want of device or host memory.
+    #[error("out of memory: {0}")]
+    OutOfMemory(String),
 }

@@ -111,7 +111,9 @@ impl ExportableSemaphore {
         // SAFETY: as above; the host promised to signal it once per frame (docs/interop.md).
         unsafe {
             if let Some(q) = queue.as_hal::<Vulkan>() {
-                q.add_wait_semaphore(self.raw, None, vk::PipelineStageFlags::TOP_OF_PIPE);
+                // Every command waits (ALL_COMMANDS), and the acquire barrier's first scope is
+                // ALL_COMMANDS too, so the two form one dependency chain.
+                q.add_wait_semaphore(self.raw, None, vk::PipelineStageFlags::ALL_COMMANDS);
             }
         }
     }
