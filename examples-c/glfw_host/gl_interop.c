@@ -4,7 +4,6 @@
 
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "lumiview_gl.h"
 #include "lv_lumi.h"
@@ -44,18 +43,12 @@ bool gl_uuids_match(const gl_uuids *u, const uint8_t device[16], const uint8_t d
     return false;
 }
 
-bool gl_import(const lumi_export *e, const gl_uuids *u, gl_imported *out) {
+bool gl_import(const lumi_export *e, gl_imported *out) {
     memset(out, 0, sizeof *out);
-    const char *what = e->gl_internal_format == GL_R32F ? "the depth image" : "the colour image";
-    /* The same check lumi_gl_import makes, here with a message naming both sides. */
-    if (!gl_uuids_match(u, e->device_uuid, e->driver_uuid, what)) {
-        if (e->fd >= 0) close(e->fd);
-        return false;
-    }
-    GLenum err = lumi_gl_import(e, &out->memory, &out->texture); /* consumes e->fd */
+    GLenum err = lumi_gl_import(e, &out->memory, &out->texture); /* consumes e->fd; checks the UUIDs */
     if (err != GL_NO_ERROR) {
-        fprintf(stderr, "glfw_host: lumi_gl_import of %s (%ux%u, GL format 0x%x, %llu bytes) failed: GL error 0x%x\n",
-                what, e->width, e->height, e->gl_internal_format, (unsigned long long)e->allocation_size, err);
+        fprintf(stderr, "glfw_host: lumi_gl_import (%ux%u, GL format 0x%x) failed: GL error 0x%x%s\n", e->width,
+                e->height, e->gl_internal_format, err, err == GL_INVALID_OPERATION ? " (another device?)" : "");
         return false;
     }
     out->width = e->width;

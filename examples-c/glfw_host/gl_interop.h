@@ -32,11 +32,12 @@ typedef struct gl_imported {
     uint32_t width, height;
 } gl_imported;
 
-/* Imports one export: checks its UUIDs against `u`, creates a memory object (dedicated as the export
- * says), imports the fd, and creates a texture with GL_TEXTURE_TILING_EXT and
- * glTextureStorageMem2DEXT in the export's GL format and size. Takes ownership of e->fd: GL owns it
- * after a successful glImportMemoryFdEXT; it is closed here on every failure before that. */
-bool gl_import(const lumi_export *e, const gl_uuids *u, gl_imported *out);
+/* Imports one export with lumi_gl_import (lumiview_gl.h): checks its UUIDs against the context's,
+ * creates a memory object (dedicated as the export says), imports the fd, and creates a texture with
+ * GL_TEXTURE_TILING_EXT and glTextureStorageMem2DEXT in the export's GL format and size. Takes
+ * ownership of e->fd: GL owns it after a successful import; it is closed on every failure before
+ * that. The host checks the UUIDs once beforehand with gl_uuids_match, for its message. */
+bool gl_import(const lumi_export *e, gl_imported *out);
 
 /* Deletes the texture and the memory object (GL then closes the fd). Zeroed input is fine. */
 void gl_imported_free(gl_imported *im);

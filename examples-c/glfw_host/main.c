@@ -342,11 +342,10 @@ static float *fetch_lut(lumi_context *ctx, lumi_luminaire lum) {
 }
 
 /* Exports one attachment and imports it into GL (the export's fd is consumed either way). */
-static bool import_attachment(lumi_context *ctx, lumi_target target, uint32_t which, const gl_uuids *u,
-                              gl_imported *out) {
+static bool import_attachment(lumi_context *ctx, lumi_target target, uint32_t which, gl_imported *out) {
     lumi_export e;
     if (!lv_lumi_ok(lumi_target_export(ctx, target, which, &e), "lumi_target_export")) return false;
-    return gl_import(&e, u, out);
+    return gl_import(&e, out);
 }
 
 static double now_s(void) {
@@ -488,8 +487,8 @@ int main(int argc, char **argv) {
     td.exportable = true;
     if (!lv_lumi_ok(lumi_target_create(ctx, &td, &target), "lumi_target_create")) goto done;
     /* Imported once; every frame renders into the same memory. */
-    if (!import_attachment(ctx, target, LUMI_ATTACHMENT_COLOR, &uuids, &color) ||
-        !import_attachment(ctx, target, LUMI_ATTACHMENT_DEPTH, &uuids, &depth))
+    if (!import_attachment(ctx, target, LUMI_ATTACHMENT_COLOR, &color) ||
+        !import_attachment(ctx, target, LUMI_ATTACHMENT_DEPTH, &depth))
         goto done;
     printf("imported colour (%s) and depth (R32F) %dx%d through GL_EXT_memory_object_fd\n",
            o.color32 ? "RGBA32F" : "RGBA16F", fb_w, fb_h);
