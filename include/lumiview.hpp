@@ -257,6 +257,13 @@ public:
     int fd() const noexcept { return export_.fd; }
     /// Gives up ownership of the fd and returns it; `fd()` and `get().fd` are -1 afterwards.
     int release_fd() noexcept { return std::exchange(export_.fd, -1); }
+    /// Gives up ownership of the fd and returns the whole export with it (for `lumi_vk_import` or
+    /// `lumi_gl_import`, which take the fd); this object keeps the other fields, its fd -1.
+    lumi_export release() noexcept {
+        lumi_export e = export_;
+        export_.fd = -1;
+        return e;
+    }
     /// The `lumi_export` fields (allocation size, formats, layout, UUIDs …); `fd` as `fd()`.
     const lumi_export &get() const noexcept { return export_; }
     /// Field access: `image->allocation_size`, `image->vk_format`, `image->width` …
@@ -581,7 +588,9 @@ public:
     /// `lumi_render_options_default()`. Returns after the GPU finished (unless the target has
     /// semaphores). Wraps `lumi_render`.
     void render(target &into, const lumi_camera &camera, const lumi_render_options *options) {
-        detail::check(lumi_render(live("lumi::context::render"), into.handle(), &camera, options));
+        lumi_context *ctx = live("lumi::context::render");
+        if (!into) detail::throw_empty("lumi::context::render (an empty target)");
+        detail::check(lumi_render(ctx, into.handle(), &camera, options));
     }
     /// As above with the default options.
     void render(target &into, const lumi_camera &camera) { render(into, camera, nullptr); }

@@ -14,7 +14,10 @@
  * Per frame: `lumi_render` (it returns once the GPU is done), draw with `texture`, and finish the
  * reads before the next `lumi_render` into the same target (`lumi_gl_finish_reads()`, i.e.
  * glFinish, or the semaphore path: `lumi_gl_import_semaphore`, `lumi_gl_wait_render` and
- * `lumi_gl_signal_host_done`). Free with `lumi_gl_release_import`. */
+ * `lumi_gl_signal_host_done`). Free with `lumi_gl_release_import`.
+ *
+ * The import functions take ownership of `e->fd` although `e` is const: afterwards the caller's
+ * copy of the number is stale (with lumiview.hpp, pass `exported_image::release()`'s struct). */
 #ifndef LUMIVIEW_GL_H
 #define LUMIVIEW_GL_H
 
@@ -69,6 +72,12 @@ static inline bool lumi_gl_same_device(const uint8_t device_uuid[16], const uint
     GLubyte uuid[GL_UUID_SIZE_EXT];
     GLint n = 0;
     glGetIntegerv(GL_NUM_DEVICE_UUIDS_EXT, &n);
+    if (n <= 0) {
+        /* No GL_EXT_memory_object (the query raised GL_INVALID_ENUM): its entry points may be NULL. */
+        for (int i = 0; i < 16 && glGetError() != GL_NO_ERROR; i++) {
+        }
+        return false;
+    }
     bool device_ok = false;
     for (GLint i = 0; i < n && i < 8; i++) {
         memset(uuid, 0, sizeof uuid);
@@ -103,10 +112,10 @@ static inline GLenum lumi_gl_import(const lumi_export *e, GLuint *memory, GLuint
     GLint dedicated = e->dedicated ? GL_TRUE : GL_FALSE;
     *memory = 0;
     *texture = 0;
-    while (glGetError() != GL_NO_ERROR) {
+    for (int i = 0; i < 16 && glGetError() != GL_NO_ERROR; i++) {
         /* earlier errors are not ours */
     }
-    if (!lumi_gl_same_device(e->device_uuid, e->driver_uuid) || e->width == 0 || e->height == 0 ||
+    if (fd < 0 || !lumi_gl_same_device(e->device_uuid, e->driver_uuid) || e->width == 0 || e->height == 0 ||
         e->allocation_size == 0) {
         err = GL_INVALID_OPERATION;
         goto fail;
@@ -142,7 +151,7 @@ static inline void lumi_gl_finish_reads(void) { glFinish(); }
  * from `lumi_target_export_semaphores` into a new semaphore object (GL owns the fd on success; it
  * is closed here on failure). Returns GL_NO_ERROR or the GL error. */
 static inline GLenum lumi_gl_import_semaphore(int32_t fd, GLuint *semaphore) {
-    while (glGetError() != GL_NO_ERROR) {
+    for (int i = 0; i < 16 && glGetError() != GL_NO_ERROR; i++) {
     }
     glGenSemaphoresEXT(1, semaphore);
     glImportSemaphoreFdEXT(*semaphore, GL_HANDLE_TYPE_OPAQUE_FD_EXT, fd);
@@ -155,18 +164,22 @@ static inline GLenum lumi_gl_import_semaphore(int32_t fd, GLuint *semaphore) {
     return err;
 }
 
-/* Each frame before reading `texture`: the GPU wait on `render_done` (source layout
- * GL_LAYOUT_SHADER_READ_ONLY_EXT, the layout lumiview released the image in). */
-static inline void lumi_gl_wait_render(GLuint render_done, GLuint texture) {
-    GLenum layout = GL_LAYOUT_SHADER_READ_ONLY_EXT;
-    glWaitSemaphoreEXT(render_done, 0, NULL, 1, &texture, &layout);
+/* Each frame before reading the target's textures (all of them in one call: colour and depth; at
+ * most 4): the GPU wait on `render_done`, source layout GL_LAYOUT_SHADER_READ_ONLY_EXT (the layout
+ * lumiview released the images in). */
+static inline void lumi_gl_wait_render(GLuint render_done, GLuint count, const GLuint *textures) {
+    GLenum layouts[4] = {GL_LAYOUT_SHADER_READ_ONLY_EXT, GL_LAYOUT_SHADER_READ_ONLY_EXT,
+                         GL_LAYOUT_SHADER_READ_ONLY_EXT, GL_LAYOUT_SHADER_READ_ONLY_EXT};
+    glWaitSemaphoreEXT(render_done, 0, NULL, count < 4 ? count : 4, textures, layouts);
 }
 
-/* Each frame after the last command that reads `texture`, exactly once: signal `host_done`
- * (destination layout GL_LAYOUT_SHADER_READ_ONLY_EXT, which lumiview's next frame acquires). */
-static inline void lumi_gl_signal_host_done(GLuint host_done, GLuint texture) {
-    GLenum layout = GL_LAYOUT_SHADER_READ_ONLY_EXT;
-    glSignalSemaphoreEXT(host_done, 0, NULL, 1, &texture, &layout);
+/* Each frame after the last command that reads the textures, exactly once and naming all of them
+ * (at most 4): signal `host_done`, destination layout GL_LAYOUT_SHADER_READ_ONLY_EXT (which
+ * lumiview's next frame acquires), and flush so the signal reaches the GPU. */
+static inline void lumi_gl_signal_host_done(GLuint host_done, GLuint count, const GLuint *textures) {
+    GLenum layouts[4] = {GL_LAYOUT_SHADER_READ_ONLY_EXT, GL_LAYOUT_SHADER_READ_ONLY_EXT,
+                         GL_LAYOUT_SHADER_READ_ONLY_EXT, GL_LAYOUT_SHADER_READ_ONLY_EXT};
+    glSignalSemaphoreEXT(host_done, 0, NULL, count < 4 ? count : 4, textures, layouts);
     glFlush();
 }
 #endif /* GL_EXT_semaphore_fd */

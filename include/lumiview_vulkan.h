@@ -3,7 +3,11 @@
  *
  * What the host needs: a Vulkan 1.1 instance and device on the exporting physical device
  * (`lumi_vk_find_physical_device`), with the device extension VK_KHR_external_memory_fd enabled
- * (and VK_KHR_external_semaphore_fd for the semaphore path); see `LUMI_VK_DEVICE_EXTENSIONS`.
+ * (`LUMI_VK_MEMORY_EXTENSION`; and VK_KHR_external_semaphore_fd, `LUMI_VK_SEMAPHORE_EXTENSION`, for
+ * the semaphore path).
+ *
+ * The import functions take ownership of `e->fd` although `e` is const: afterwards the caller's
+ * copy of the number is stale (with lumiview.hpp, pass `exported_image::release()`'s struct).
  *
  * Per export (once, or again after the target is recreated):
  *     lumi_export e;  lumi_target_export(ctx, target, LUMI_ATTACHMENT_COLOR, &e);
@@ -36,8 +40,10 @@
 
 #include "lumiview.h"
 
-/* The device extensions the import needs (the second only for `lumi_target_desc.semaphores`). */
-#define LUMI_VK_DEVICE_EXTENSIONS {VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME, VK_KHR_EXTERNAL_SEMAPHORE_FD_EXTENSION_NAME}
+/* The device extension the image import needs, and the one the semaphore path
+ * (`lumi_target_desc.semaphores`) needs besides. */
+#define LUMI_VK_MEMORY_EXTENSION VK_KHR_EXTERNAL_MEMORY_FD_EXTENSION_NAME
+#define LUMI_VK_SEMAPHORE_EXTENSION VK_KHR_EXTERNAL_SEMAPHORE_FD_EXTENSION_NAME
 
 /* The image aspect of an export: depth for `LUMI_DEPTH_D32F` (VK_FORMAT_D32_SFLOAT), else colour. */
 static inline VkImageAspectFlags lumi_vk_aspect(const lumi_export *e) {
@@ -84,8 +90,10 @@ static inline VkResult lumi_vk_find_physical_device(VkInstance instance, const l
  * (dedicated when `e->dedicated`) and binds it. Takes ownership of `e->fd`: the driver owns it
  * after a successful import, and it is closed here on every failure. On failure nothing is left
  * behind and `*image`, `*memory` are VK_NULL_HANDLE. Returns VK_SUCCESS, the failing call's
- * result, VK_ERROR_INCOMPATIBLE_DRIVER (another device or driver) or VK_ERROR_FORMAT_NOT_SUPPORTED
- * (not importable, or a dedicated-only import of a non-dedicated export). Free with
+ * result, VK_ERROR_INCOMPATIBLE_DRIVER (another device or driver), VK_ERROR_FORMAT_NOT_SUPPORTED
+ * (not importable, or a dedicated-only import of a non-dedicated export) or
+ * VK_ERROR_INVALID_EXTERNAL_HANDLE (no fd, an empty export, or a size or memory type that does not
+ * fit the image). Free with
  * `lumi_vk_release_import`. Needs VK_KHR_external_memory_fd on `device`. */
 static inline VkResult lumi_vk_import(VkPhysicalDevice physical, VkDevice device, const lumi_export *e,
                                       VkImage *image, VkDeviceMemory *memory) {
@@ -93,6 +101,10 @@ static inline VkResult lumi_vk_import(VkPhysicalDevice physical, VkDevice device
     VkResult r = VK_SUCCESS;
     *image = VK_NULL_HANDLE;
     *memory = VK_NULL_HANDLE;
+    if (fd < 0 || e->width == 0 || e->height == 0 || e->allocation_size == 0) {
+        r = VK_ERROR_INVALID_EXTERNAL_HANDLE;
+        goto fail;
+    }
     if (!lumi_vk_same_device(physical, e->device_uuid, e->driver_uuid)) {
         r = VK_ERROR_INCOMPATIBLE_DRIVER;
         goto fail;
@@ -153,8 +165,10 @@ static inline VkResult lumi_vk_import(VkPhysicalDevice physical, VkDevice device
     {
         VkMemoryRequirements req;
         vkGetImageMemoryRequirements(device, *image, &req);
-        /* An opaque-fd import uses the exporter's allocation size and memory type. */
-        if (req.size > e->allocation_size || e->vk_memory_type_index >= 32 ||
+        /* An opaque-fd import uses the exporter's allocation size and memory type; a dedicated one
+         * is exactly the image's size (VUID-VkMemoryDedicatedAllocateInfo-image-01433). */
+        if (req.size > e->allocation_size || (e->dedicated && req.size != e->allocation_size) ||
+            e->vk_memory_type_index >= 32 ||
             !(req.memoryTypeBits & (1u << e->vk_memory_type_index))) {
             r = VK_ERROR_INVALID_EXTERNAL_HANDLE;
             goto fail;

@@ -103,35 +103,29 @@ impl HostCamera {
     /// of triangles, compared with an unmirrored view: a triangle counter-clockwise as seen from the
     /// eye is then clockwise in wgpu's NDC. A y-flipping `Origin::BottomLeft`, a mirrored model or
     /// view (negative determinant) and a mirrored projection each reverse it; two reversals cancel.
-    /// Hardware face culling must swap front and back when this is true. Measured, not derived from
-    /// the matrices' signs, so any projection works: a small triangle facing the eye around the
-    /// point that projects to the centre of the image (NDC (0, 0, 0.5), inside every frustum) is
-    /// projected and its signed area read.
+    /// Hardware face culling must swap front and back when this is true.
+    ///
+    /// From the rows of the clip-from-local matrix (f64): near a point that projects to the
+    /// image's centre, NDC (x, y) changes with a local offset δ as (r_x·δ, r_y·δ)/w, so a small
+    /// triangle with normal m covers the signed area (r_x × r_y)·m / w² (times its own area): the
+    /// winding is reversed where (r_x × r_y) points away from the eye. Perspective: the eye is a
+    /// point and r_x × r_y lies along the central ray, parallel to (eye − p₀) for p₀ on that ray,
+    /// so the sign is robust at any distance. Orthographic: depth grows away from the eye along
+    /// r_z (unless `reversed_z`), so the winding is reversed where det[r_x; r_y; r_z] > 0.
     pub fn mirrors_winding(&self, model: Mat4) -> bool {
-        let clip_from_local = self.clip_from_world() * model;
-        let local_from_clip = clip_from_local.inverse();
-        let p0 = local_from_clip.project_point3(Vec3::new(0.0, 0.0, 0.5));
-        let eye = self.eye_in(model);
-        let towards_eye = if eye.w > 0.5 {
-            eye.truncate() - p0
-        } else {
-            eye.truncate()
+        let c = (self.clip_from_world() * model).as_dmat4();
+        let row = |i: usize| glam::DVec3::new(c.x_axis[i], c.y_axis[i], c.z_axis[i]);
+        let (rx, ry, rz) = (row(0), row(1), row(2));
+        let n = rx.cross(ry);
+        if self.is_orthographic() {
+            return (n.dot(rz) > 0.0) != self.reversed_z;
         }
-        .normalize_or_zero();
-        if towards_eye == Vec3::ZERO || !p0.is_finite() {
-            return false;
-        }
-        // u ⟂ t and v = t × u, so (u × v)·t > 0: the triangle p0, p0 + εu, p0 + εv faces the eye and
-        // is counter-clockwise seen from it.
-        let u = towards_eye.any_orthonormal_vector();
-        let v = towards_eye.cross(u);
-        let eps = 1e-3 * (eye.truncate() - p0).length().max(1e-3);
-        let ndc = |p: Vec3| {
-            let c = clip_from_local * p.extend(1.0);
-            glam::Vec2::new(c.x / c.w, c.y / c.w)
-        };
-        let (a, b, c) = (ndc(p0), ndc(p0 + eps * u), ndc(p0 + eps * v));
-        (b - a).perp_dot(c - a) < 0.0
+        let eye = (self.view * model)
+            .as_dmat4()
+            .inverse()
+            .transform_point3(glam::DVec3::ZERO);
+        let p0 = c.inverse().project_point3(glam::DVec3::new(0.0, 0.0, 0.5));
+        n.dot(eye - p0) < 0.0
     }
 
     /// The camera of a pinhole view given like a capture camera (position, OpenCV basis right /
@@ -390,6 +384,62 @@ mod tests {
                 "eye {eye}: orthographic, BottomLeft"
             );
         }
+    }
+
+    #[test]
+    fn winding_holds_far_away_and_for_a_left_handed_orthographic_camera() {
+        // 170 m away with a 1 cm near plane (f32 rounding made a measured triangle vanish there).
+        let eye = Vec3::new(120.0, -90.0, -80.0);
+        let n = 0.01f32;
+        let (f, far) = (1.0 / 0.5f32.tan(), 1000.0f32);
+        let projection = Mat4::from_cols(
+            Vec4::new(f / 1.5, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, f, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, (far + n) / (n - far), -1.0),
+            Vec4::new(0.0, 0.0, 2.0 * far * n / (n - far), 0.0),
+        );
+        let top = HostCamera {
+            view: look_at(eye, Vec3::ZERO, Vec3::Z, false),
+            projection,
+            depth_range: DepthRange::NegOneToOne,
+            reversed_z: false,
+            origin: Origin::TopLeft,
+        };
+        assert!(!top.mirrors_winding(Mat4::IDENTITY));
+        assert!(HostCamera {
+            origin: Origin::BottomLeft,
+            ..top
+        }
+        .mirrors_winding(Mat4::IDENTITY));
+        // A left-handed orthographic camera (looking down eye +Z, depth 0…1): mirrored on the
+        // right-handed luminaire frame, like the left-handed perspective one.
+        let lh_ortho = HostCamera {
+            view: look_at(Vec3::new(0.3, -0.4, -2.0), Vec3::ZERO, Vec3::Z, true),
+            projection: Mat4::from_cols(
+                Vec4::X,
+                Vec4::Y,
+                Vec4::new(0.0, 0.0, 1.0 / 9.9, 0.0),
+                Vec4::new(0.0, 0.0, -0.1 / 9.9, 1.0),
+            ),
+            depth_range: DepthRange::ZeroToOne,
+            reversed_z: false,
+            origin: Origin::TopLeft,
+        };
+        assert!(lh_ortho.mirrors_winding(Mat4::IDENTITY));
+        // Reversed Z flips which way depth grows, not the image.
+        let rh_ortho_reversed = HostCamera {
+            view: look_at(Vec3::new(0.3, -0.4, -2.0), Vec3::ZERO, Vec3::Z, false),
+            projection: Mat4::from_cols(
+                Vec4::X,
+                Vec4::Y,
+                Vec4::new(0.0, 0.0, 1.0 / 9.9, 0.0),
+                Vec4::new(0.0, 0.0, 10.0 / 9.9, 1.0),
+            ),
+            depth_range: DepthRange::ZeroToOne,
+            reversed_z: true,
+            origin: Origin::TopLeft,
+        };
+        assert!(!rh_ortho_reversed.mirrors_winding(Mat4::IDENTITY));
     }
 
     #[test]
