@@ -35,13 +35,6 @@ fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
     return out;
 }
 
-struct FsOut {
-    @location(0) color: vec4<f32>,
-    @location(1) depth: vec4<f32>,
-};
-
-const PI: f32 = 3.14159265358979;
-
 // Luminance (cd/m²) towards the unit direction d (luminaire frame), bilinear between table nodes,
 // wrapping in C.
 fn luminance_towards(d: vec3<f32>) -> f32 {
@@ -66,24 +59,9 @@ fn luminance_towards(d: vec3<f32>) -> f32 {
     return mix(mix(a, b, fu), mix(e, f, fu), fv);
 }
 
-fn tone_map(l: f32) -> f32 {
-    let x = max(l * inst.params.x, 0.0);
-    return x / (1.0 + x);
-}
-
 fn opening_color(in: VsOut) -> vec4<f32> {
-    var d: vec3<f32>;
-    if (inst.eye_local.w > 0.5) {
-        d = normalize(inst.eye_local.xyz - in.local_pos);
-    } else {
-        d = normalize(inst.eye_local.xyz);
-    }
-    let l = luminance_towards(d);
-    if (inst.params.y > 0.5) {
-        let t = tone_map(l);
-        return vec4<f32>(t, t, t, 1.0);
-    }
-    return vec4<f32>(l, l, l, 1.0);
+    let l = luminance_towards(towards_eye(inst.eye_local, in.local_pos));
+    return luminance_color(l, inst.params.x, inst.params.y > 0.5);
 }
 
 fn line_color() -> vec4<f32> {

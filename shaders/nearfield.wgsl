@@ -82,9 +82,6 @@ struct Lum {
 @group(1) @binding(14) var<storage, read> pool7: array<u32>;
 
 
-const EMPTY: u32 = 0xFFFFFFFFu;
-const PI: f32 = 3.14159265358979;
-
 // Pool pages bound (1…8), fixed per pipeline: with one page (any pool up to 128 MiB) the page switch
 // below folds away, which matters on a software rasteriser that would run every case for every lane.
 override POOL_PAGES: u32 = 8u;
@@ -168,15 +165,17 @@ struct Cam {
     bbox: vec4<u32>,
 };
 
-// Per camera 6 × vec4<u32>: the three projection rows (f32 bits) | tile box x0, y0, w, h (tiles) |
-// width, height, table offset, unused | position xyz (f32 bits; the visibility test), unused.
+// Per camera CAMERA_RECORD_VEC4S (6) × vec4<u32> (written by `NearfieldLuminaire::upload`): the
+// three projection rows (f32 bits) | tile box x0, y0, w, h (tiles) | width, height, table offset,
+// unused | position xyz (f32 bits; the visibility test), unused.
 fn camera(i: u32) -> Cam {
     var cam: Cam;
-    cam.m0 = bitcast<vec4<f32>>(cameras[6u * i]);
-    cam.m1 = bitcast<vec4<f32>>(cameras[6u * i + 1u]);
-    cam.m2 = bitcast<vec4<f32>>(cameras[6u * i + 2u]);
-    cam.bbox = cameras[6u * i + 3u];
-    let e = cameras[6u * i + 4u];
+    let r = CAMERA_RECORD_VEC4S * i;
+    cam.m0 = bitcast<vec4<f32>>(cameras[r]);
+    cam.m1 = bitcast<vec4<f32>>(cameras[r + 1u]);
+    cam.m2 = bitcast<vec4<f32>>(cameras[r + 2u]);
+    cam.bbox = cameras[r + 3u];
+    let e = cameras[r + 4u];
     cam.size = e.xy;
     cam.table = e.z;
     return cam;
@@ -562,8 +561,8 @@ struct VsOut {
 
 // A camera record packed for the varyings.
 fn packed_meta(ci: u32) -> vec4<u32> {
-    let bb = cameras[6u * ci + 3u];
-    let e = cameras[6u * ci + 4u];
+    let bb = cameras[CAMERA_RECORD_VEC4S * ci + 3u];
+    let e = cameras[CAMERA_RECORD_VEC4S * ci + 4u];
     return vec4<u32>(bb.x | (bb.y << 16u), bb.z | (bb.w << 16u), e.z, (e.x - 1u) | ((e.y - 1u) << 16u));
 }
 
@@ -612,17 +611,17 @@ fn vs_polygon(@location(0) pos: vec3<f32>, @location(1) tri: u32) -> VsOut {
         cb = bitcast<u32>(tris[3u * tri + 1u].w);
         cc = bitcast<u32>(tris[3u * tri + 2u].w);
     }
-    out.a0 = bitcast<vec4<f32>>(cameras[6u * ca]);
-    out.a1 = bitcast<vec4<f32>>(cameras[6u * ca + 1u]);
-    out.a2 = bitcast<vec4<f32>>(cameras[6u * ca + 2u]);
+    out.a0 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * ca]);
+    out.a1 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * ca + 1u]);
+    out.a2 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * ca + 2u]);
     out.am = packed_meta(ca);
-    out.b0 = bitcast<vec4<f32>>(cameras[6u * cb]);
-    out.b1 = bitcast<vec4<f32>>(cameras[6u * cb + 1u]);
-    out.b2 = bitcast<vec4<f32>>(cameras[6u * cb + 2u]);
+    out.b0 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cb]);
+    out.b1 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cb + 1u]);
+    out.b2 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cb + 2u]);
     out.bm = packed_meta(cb);
-    out.c0 = bitcast<vec4<f32>>(cameras[6u * cc]);
-    out.c1 = bitcast<vec4<f32>>(cameras[6u * cc + 1u]);
-    out.c2 = bitcast<vec4<f32>>(cameras[6u * cc + 2u]);
+    out.c0 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cc]);
+    out.c1 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cc + 1u]);
+    out.c2 = bitcast<vec4<f32>>(cameras[CAMERA_RECORD_VEC4S * cc + 2u]);
     out.cm = packed_meta(cc);
     return out;
 }
@@ -642,12 +641,7 @@ fn shade(in: VsOut) -> Shaded {
     out.depth = in.clip.z;
     let proxy = PROXY;
     let p = in.local_pos;
-    var v: vec3<f32>;
-    if (draw.eye_local.w > 0.5) {
-        v = normalize(p - draw.eye_local.xyz);
-    } else {
-        v = -normalize(draw.eye_local.xyz);
-    }
+    let v = -towards_eye(draw.eye_local, p);
     let s = lum.sphere.xyz;
     let r = lum.sphere.w;
     // The line must pass through the content ball (bounding mode draws a box around it).
@@ -724,7 +718,7 @@ fn shade(in: VsOut) -> Shaded {
         for (var i = 0u; i < n_cams; i = i + 1u) {
             if (sel.cam[i] != EMPTY && sel.w[i] > 0.0) {
                 n_valid = n_valid + 1u;
-                blocked[i] = occluded(p, bitcast<vec3<f32>>(cameras[6u * sel.cam[i] + 5u].xyz));
+                blocked[i] = occluded(p, bitcast<vec3<f32>>(cameras[CAMERA_RECORD_VEC4S * sel.cam[i] + 5u].xyz));
                 n_blocked = n_blocked + select(0u, 1u, blocked[i]);
             }
         }
@@ -779,7 +773,7 @@ fn shade(in: VsOut) -> Shaded {
             // to correct, and skip the three extra samples.
             if (PROXY && spread < 0.15 && n_lit == 3u && sel.tri != EMPTY && wsum > 0.0
                 && l_max > 1.002 * l_min && l_max <= 8.0 * l_min) {
-                let qb = lum.lists_b.z + 7u * sel.tri;
+                let qb = lum.lists_b.z + QUADRATIC_ENTRIES * sel.tri;
                 let q0 = bitcast<vec4<u32>>(tris[qb]);
                 if (q0.w == 1u) {
                     var fnb = vec3<f32>(0.0);
@@ -790,7 +784,7 @@ fn shade(in: VsOut) -> Shaded {
                         let cn = q0[k];
                         var ln = 0.0;
                         if (!(PROXY && VISIBILITY && lum.bvh.z != 0u
-                            && occluded(p, bitcast<vec3<f32>>(cameras[6u * cn + 5u].xyz)))) {
+                            && occluded(p, bitcast<vec3<f32>>(cameras[CAMERA_RECORD_VEC4S * cn + 5u].xyz)))) {
                             ln = camera_luminance(cn, p, v, proxy);
                         }
                         ok = ok && ln > 0.0;
@@ -823,12 +817,7 @@ fn shade(in: VsOut) -> Shaded {
     }
     if (BOX) {
         // Stand-in depth: the plane through the content centre facing the eye.
-        var n: vec3<f32>;
-        if (draw.eye_local.w > 0.5) {
-            n = normalize(draw.eye_local.xyz - lum.content.xyz);
-        } else {
-            n = normalize(draw.eye_local.xyz);
-        }
+        let n = towards_eye(draw.eye_local, lum.content.xyz);
         let dn = dot(v, n);
         var x = pc;
         if (abs(dn) > 1e-6) {
@@ -840,23 +829,9 @@ fn shade(in: VsOut) -> Shaded {
     return out;
 }
 
-fn tone_map(l: f32) -> f32 {
-    let x = max(l * draw.params.x, 0.0);
-    return x / (1.0 + x);
-}
-
 fn color_of(l: f32) -> vec4<f32> {
-    if (draw.params.y > 0.5) {
-        let t = tone_map(l);
-        return vec4<f32>(t, t, t, 1.0);
-    }
-    return vec4<f32>(l, l, l, 1.0);
+    return luminance_color(l, draw.params.x, draw.params.y > 0.5);
 }
-
-struct FsOut {
-    @location(0) color: vec4<f32>,
-    @location(1) depth: vec4<f32>,
-};
 
 struct FsOutColor {
     @location(0) color: vec4<f32>,

@@ -139,7 +139,8 @@ fn vertex_buffer(ctx: &GpuContext, label: &str, v: &[[f32; 3]]) -> Option<(wgpu:
     Some((buf, v.len() as u32))
 }
 
-/// Uniform block of one draw (matches `Instance` in shaders/farfield.wgsl).
+/// Uniform block of one draw (`Instance` in shaders/farfield.wgsl; `gpu::shaders` tests the two
+/// layouts are one).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct InstanceUniform {
@@ -174,16 +175,13 @@ pub struct FarfieldPass {
     uniforms: DrawSlots,
 }
 
-/// The far-field shader source.
-pub const SHADER: &str = include_str!("../../shaders/farfield.wgsl");
-
 impl FarfieldPass {
     /// Compiles the shader and creates the layouts.
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         ctx.scoped("creating the far-field pass", || {
             let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("farfield.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::farfield().into()),
             });
             let instance_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("far-field instance"),

@@ -7,6 +7,8 @@
 //! - [`meshes`]: CPU geometry of openings, solids and housings.
 //! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles and the
 //!   [`lit_bound`] polygon it draws without a proxy.
+//! - [`shaders`]: the WGSL each pass compiles (generated constants, `shaders/common/`, the pass)
+//!   and the CPU tests (naga) that hold the shader contract.
 //! - [`slots`]: per-draw records at dynamic offsets.
 //! - [`renderer`]: luminaires, instances and frames: what the C API drives.
 
@@ -18,6 +20,7 @@ pub mod meshes;
 pub mod nearfield;
 pub mod renderer;
 pub mod residency;
+pub mod shaders;
 pub mod slots;
 pub mod target;
 

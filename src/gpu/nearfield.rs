@@ -18,15 +18,13 @@ use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
 use super::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
+use super::shaders::CAMERA_RECORD_VEC4S;
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, TargetDesc, POSITION_LAYOUT};
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::pack::Pack;
 use crate::nearfield::select::{Selection, SelectionMode, SelectionOptions};
-
-/// The near-field shader source.
-pub const SHADER: &str = include_str!("../../shaders/nearfield.wgsl");
 
 /// Pool pages a luminaire can bind (the shader declares this many).
 pub const MAX_POOL_PAGES: usize = 8;
@@ -456,26 +454,27 @@ fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
     (x, a.cross(x))
 }
 
-/// Uniform block of one luminaire (matches `Lum` in shaders/nearfield.wgsl).
+/// Storage block of one luminaire (`Lum` in shaders/nearfield.wgsl, which documents the members;
+/// `gpu::shaders` tests the two layouts are one).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct LumUniform {
-    sphere: [f32; 4],
-    content: [f32; 4],
-    grid: [u32; 4],
-    lists_a: [u32; 4],
-    lists_b: [u32; 4],
-    gap: [f32; 4],
-    bvh: [u32; 4],
+pub(crate) struct LumUniform {
+    pub(crate) sphere: [f32; 4],
+    pub(crate) content: [f32; 4],
+    pub(crate) grid: [u32; 4],
+    pub(crate) lists_a: [u32; 4],
+    pub(crate) lists_b: [u32; 4],
+    pub(crate) gap: [f32; 4],
+    pub(crate) bvh: [u32; 4],
 }
 
-/// Uniform block of one draw (matches `Draw` in shaders/nearfield.wgsl).
+/// Storage block of one draw (`Draw` in shaders/nearfield.wgsl; tested like [`LumUniform`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct DrawUniform {
-    clip_from_local: [[f32; 4]; 4],
-    eye_local: [f32; 4],
-    params: [f32; 4],
+pub(crate) struct DrawUniform {
+    pub(crate) clip_from_local: [[f32; 4]; 4],
+    pub(crate) eye_local: [f32; 4],
+    pub(crate) params: [f32; 4],
 }
 
 /// The pool layout the shader divides by, given as pipeline constants (`TILE_EDGE` … in
@@ -522,6 +521,54 @@ impl PipelineKey {
     fn is_box(&self) -> bool {
         !self.proxy && self.polygon.is_none()
     }
+
+    /// The shader's overridable constants for this pipeline (`override` in shaders/nearfield.wgsl;
+    /// `gpu::shaders` tests that the names are exactly the shader's).
+    fn constants(&self) -> [(&'static str, f64); 14] {
+        let flag = |b: bool| f64::from(u8::from(b));
+        [
+            ("POOL_PAGES", f64::from(self.pool_pages)),
+            ("IDENTITY_MAP", flag(self.identity_map)),
+            ("SELECTION", f64::from(self.selection)),
+            ("PROXY", flag(self.proxy)),
+            ("VISIBILITY", flag(self.visibility)),
+            ("TRIANGLES", flag(self.polygon == Some(PolygonKind::Triangles))),
+            ("CELLS", flag(self.polygon == Some(PolygonKind::Cells))),
+            ("BOX", flag(self.is_box())),
+            ("TILE_EDGE", f64::from(self.pool_layout.tile_edge)),
+            ("SLOT_WORDS", f64::from(self.pool_layout.slot_words)),
+            ("CHUNK_WORDS", f64::from(self.pool_layout.chunk_words)),
+            ("PAGE_CHUNKS", f64::from(self.pool_layout.page_chunks)),
+            ("TABLE_PER_CHUNK", f64::from(self.pool_layout.table_per_chunk)),
+            ("SLOTS_PER_CHUNK", f64::from(self.pool_layout.slots_per_chunk)),
+        ]
+    }
+}
+
+/// The names of the near-field pipeline's constants (for `gpu::shaders`' tests).
+#[cfg(test)]
+pub(crate) fn pipeline_constant_names() -> Vec<&'static str> {
+    let key = PipelineKey {
+        pool_layout: PoolLayout {
+            tile_edge: 8,
+            slot_words: 33,
+            chunk_words: 16384,
+            page_chunks: 2048,
+            table_per_chunk: 16384,
+            slots_per_chunk: 496,
+        },
+        color: ColorFormat::Rgba32Float,
+        depth_copy: false,
+        reversed_z: false,
+        pool_pages: 1,
+        identity_map: false,
+        selection: 2,
+        proxy: false,
+        visibility: false,
+        cull: None,
+        polygon: None,
+    };
+    key.constants().iter().map(|(n, _)| *n).collect()
 }
 
 const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
@@ -634,7 +681,7 @@ impl NearfieldPass {
         ctx.scoped("creating the near-field pass", || {
             let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("nearfield.wgsl"),
-                source: wgpu::ShaderSource::Wgsl(SHADER.into()),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::nearfield().into()),
             });
             let draw_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some("near-field draw"),
@@ -745,7 +792,7 @@ impl NearfieldPass {
             let storage = wgpu::BufferUsages::STORAGE;
             // Camera records.
             let layout = pack.layout();
-            let mut cams: Vec<[u32; 4]> = Vec::with_capacity(set.cameras.len() * 6);
+            let mut cams: Vec<[u32; 4]> = Vec::with_capacity(set.cameras.len() * CAMERA_RECORD_VEC4S);
             for (i, (c, e)) in set.cameras.iter().zip(pack.images()).enumerate() {
                 let k = set.intrinsics_of(i);
                 let f = |v: f64| (v as f32).to_bits();
@@ -763,6 +810,7 @@ impl NearfieldPass {
                 cams.push([e.bbox.x0, e.bbox.y0, e.bbox.w, e.bbox.h]);
                 cams.push([e.width, e.height, e.table_offset as u32, 0]);
                 cams.push([f(p.x), f(p.y), f(p.z), 0]);
+                debug_assert_eq!(cams.len(), (i + 1) * CAMERA_RECORD_VEC4S);
             }
             let g = selection.gpu_data();
             let mut lists: Vec<u32> = Vec::new();
@@ -1011,25 +1059,7 @@ impl NearfieldPass {
         if let Some(p) = self.pipelines.get(&key) {
             return Ok(p.clone());
         }
-        let constants = [
-            ("POOL_PAGES", f64::from(key.pool_pages)),
-            ("IDENTITY_MAP", f64::from(u8::from(key.identity_map))),
-            ("SELECTION", f64::from(key.selection)),
-            ("PROXY", f64::from(u8::from(key.proxy))),
-            ("VISIBILITY", f64::from(u8::from(key.visibility))),
-            (
-                "TRIANGLES",
-                f64::from(u8::from(key.polygon == Some(PolygonKind::Triangles))),
-            ),
-            ("CELLS", f64::from(u8::from(key.polygon == Some(PolygonKind::Cells)))),
-            ("BOX", f64::from(u8::from(key.is_box()))),
-            ("TILE_EDGE", f64::from(key.pool_layout.tile_edge)),
-            ("SLOT_WORDS", f64::from(key.pool_layout.slot_words)),
-            ("CHUNK_WORDS", f64::from(key.pool_layout.chunk_words)),
-            ("PAGE_CHUNKS", f64::from(key.pool_layout.page_chunks)),
-            ("TABLE_PER_CHUNK", f64::from(key.pool_layout.table_per_chunk)),
-            ("SLOTS_PER_CHUNK", f64::from(key.pool_layout.slots_per_chunk)),
-        ];
+        let constants = key.constants();
         let p = ctx.scoped("creating a near-field pipeline", || {
             let targets = &frame_color_targets(key.color, key.depth_copy);
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
