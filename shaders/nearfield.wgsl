@@ -112,19 +112,19 @@ override PROXY: bool = false;
 // (it cannot block the path from a point on it to a camera), and its pipelines leave the test out.
 override VISIBILITY: bool = true;
 
-// Continuous mode without a proxy, drawn as the triangle raster (src/gpu/lit_bound.rs): each polygon
+// Continuous mode without a proxy, drawn as the triangle raster (src/nearfield/select/lit_bound.rs): each polygon
 // covers one selection triangle's region (vertex attribute `tri`) and the fragment takes that
 // triangle's weights directly, without the cell search.
 override TRIANGLES: bool = false;
 
-// Nearest mode without a proxy, drawn as the cell raster (src/gpu/lit_bound.rs): each polygon covers
+// Nearest mode without a proxy, drawn as the cell raster (src/nearfield/select/lit_bound.rs): each polygon covers
 // (a little more than) one camera's Voronoi cell, `tri` naming the camera; the fragment runs the usual
 // selection and is kept only where it picks that camera, so overlapping cells write each pixel once.
 override CELLS: bool = false;
 
 // The draw is the content box: the fragment writes the stand-in depth itself (entry points fs_box*).
 // Proxy and polygon draws take the rasteriser's depth: the proxy's own, or the polygon's, which lies
-// on the stand-in plane already (src/gpu/lit_bound.rs), and write no frag_depth.
+// on the stand-in plane already (src/nearfield/select/lit_bound.rs), and write no frag_depth.
 override BOX: bool = false;
 
 // The pool chunk of pack chunk `c` (EMPTY: not resident).
@@ -595,7 +595,7 @@ fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
     return out;
 }
 
-// The frame's bounding polygons (src/gpu/lit_bound.rs): a point and its selection triangle (or cell
+// The frame's bounding polygons (src/nearfield/select/lit_bound.rs): a point and its selection triangle (or cell
 // camera), with the records of the cameras it draws.
 @vertex
 fn vs_polygon(@location(0) pos: vec3<f32>, @location(1) tri: u32) -> VsOut {

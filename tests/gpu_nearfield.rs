@@ -9,13 +9,13 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use glam::{DVec2, DVec3, Mat4};
-use lumiview::gpu::lit_bound::PolygonKind;
 use lumiview::gpu::nearfield::{NearfieldOptions, NearfieldSettings};
 use lumiview::gpu::{Attachment, ColorFormat, DepthFormat, HostCamera, RenderOptions, Renderer, TargetDesc};
 use lumiview::nearfield::layout::Layout;
 use lumiview::nearfield::pack::{write_pack, Pack, PackOptions};
 use lumiview::nearfield::proxy::triangles_of;
 use lumiview::nearfield::rayset::look_at_basis;
+use lumiview::nearfield::select::lit_bound::PolygonKind;
 use lumiview::nearfield::select::SelectionMode;
 use lumiview::nearfield::synth::{self, render_pinhole, SynthOptions};
 use lumiview::nearfield::{Camera, Intrinsics};
@@ -295,7 +295,7 @@ fn box_from_inside_is_drawn_for_every_origin_and_mirrored_models() {
     gpu_common::assert_no_validation_messages();
 }
 
-/// Without a proxy the pass draws bounding polygons of the pixels that can be lit (`gpu::lit_bound`:
+/// Without a proxy the pass draws bounding polygons of the pixels that can be lit (`nearfield::select::lit_bound`:
 /// the hull, the continuous triangle raster, the nearest cell raster) where they apply: the frame must
 /// light the same pixels as the one drawn with the content ball's box, with the same values and depths
 /// up to fp32 rounding, in every mode, from far, near, grazing and inside-the-sphere eyes, looking at

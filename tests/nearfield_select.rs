@@ -764,9 +764,8 @@ fn bad_input_is_an_error_naming_the_argument() {
 /// marked from a sample inside, so a test could not tell a slightly short slack).
 #[test]
 fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
-    use glam::{Mat4, Vec4};
-    use lumiview::gpu::camera::HostCamera;
-    use lumiview::gpu::nearfield::view_cells;
+    use glam::Vec4;
+    use lumiview::nearfield::select::view::{ortho_view_projection, pinhole_view_projection, view_cells};
     let set = layout_set(
         Layout::Rigo {
             per_hemisphere: 2000,
@@ -796,7 +795,9 @@ fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
         (DVec3::new(0.8, 0.6, -1.6), DVec3::ZERO, 60.0, 1.0),
     ];
     for (eye, target, fov, fewer) in views {
-        let host = if fov > 0.0 {
+        // GL matrices (clip z in −w…w; the frustum's side planes and the unprojected lines below
+        // do not depend on the depth range) and the eye: a point, or the direction towards it.
+        let ((view, projection), eye4) = if fov > 0.0 {
             let cam = Camera::looking_at(eye, target, "eye");
             let f = 100.0 / (0.5 * f64::to_radians(fov)).tan();
             let k = Intrinsics {
@@ -805,12 +806,15 @@ fn view_cells_with_the_frustum_keep_every_pixels_cell_and_drop_the_rest() {
                 principal_px: DVec2::new(150.0, 100.0),
                 focal_px: DVec2::splat(f),
             };
-            HostCamera::from_pinhole(&cam, &k, 0.01, 10.0)
+            (pinhole_view_projection(&cam, &k, 0.01, 10.0), eye.as_vec3().extend(1.0))
         } else {
-            HostCamera::from_ortho((eye - target).normalize(), target, 1e-4, 450, 300, 2.0)
+            let towards_eye = (eye - target).normalize();
+            (
+                ortho_view_projection(towards_eye, target, 1e-4, 450, 300, 2.0),
+                towards_eye.as_vec3().extend(0.0),
+            )
         };
-        let clip = host.clip_from_world();
-        let eye4 = host.eye_in(Mat4::IDENTITY);
+        let clip = projection * view;
         let all = view_cells(&sel, (c, r), rc, eye4, None);
         let kept = view_cells(&sel, (c, r), rc, eye4, Some(clip));
         if fewer > 1.0 {

@@ -6,7 +6,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use lumiview::gpu::meshes::{housing_lines, opening_triangles};
+use lumiview::photometry::meshes::{housing_lines, opening_triangles};
 use lumiview::photometry::{load_from_text, LoadOptions, OpeningShape, Photometry};
 
 /// An EULUMDAT file, Isym 0, C 0–345° step 15 × γ 0–180° step 5, one lamp set of 1000 lm with

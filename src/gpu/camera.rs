@@ -131,37 +131,15 @@ impl HostCamera {
     /// The camera of a pinhole view given like a capture camera (position, OpenCV basis right /
     /// down / forward, intrinsics in pixels; luminaire frame = world), as a GL-convention host
     /// camera with a top-left origin, so that target row 0 is image row 0 and pixel (u, v) of the
-    /// intrinsics is target pixel (u, v). Depth range `near_m`…`far_m`.
+    /// intrinsics is target pixel (u, v). Depth range `near_m`…`far_m`. The matrices:
+    /// [`crate::nearfield::select::view::pinhole_view_projection`].
     pub fn from_pinhole(
         cam: &crate::nearfield::Camera,
         k: &crate::nearfield::Intrinsics,
         near_m: f32,
         far_m: f32,
     ) -> Self {
-        let (r, d, f) = (cam.right.as_vec3(), cam.down.as_vec3(), cam.forward.as_vec3());
-        let e = cam.position_m.as_vec3();
-        let up = -d;
-        // Eye space: x = right, y = up, z = −forward.
-        let view = Mat4::from_cols(
-            Vec4::new(r.x, up.x, -f.x, 0.0),
-            Vec4::new(r.y, up.y, -f.y, 0.0),
-            Vec4::new(r.z, up.z, -f.z, 0.0),
-            Vec4::new(-r.dot(e), -up.dot(e), f.dot(e), 1.0),
-        );
-        let (w, h) = (k.width as f32, k.height as f32);
-        let (fx, fy) = (k.focal_px.x as f32, k.focal_px.y as f32);
-        let (cx, cy) = (k.principal_px.x as f32, k.principal_px.y as f32);
-        let projection = Mat4::from_cols(
-            Vec4::new(2.0 * fx / w, 0.0, 0.0, 0.0),
-            Vec4::new(0.0, 2.0 * fy / h, 0.0, 0.0),
-            Vec4::new(
-                1.0 - 2.0 * cx / w,
-                2.0 * cy / h - 1.0,
-                (far_m + near_m) / (near_m - far_m),
-                -1.0,
-            ),
-            Vec4::new(0.0, 0.0, 2.0 * far_m * near_m / (near_m - far_m), 0.0),
-        );
+        let (view, projection) = crate::nearfield::select::view::pinhole_view_projection(cam, k, near_m, far_m);
         HostCamera {
             view,
             projection,
@@ -173,7 +151,9 @@ impl HostCamera {
 
     /// An orthographic view like `synth::OrthoView`: looking along −`direction` at `centre_m`,
     /// `pixel_m` metres per pixel, `width` × `height` pixels, image axes from
-    /// `rayset::look_at_basis(−direction)` (row 0 at the top), depth `±depth_m` around the centre.
+    /// `rayset::look_at_basis(−direction)` (row 0 at the top), depth `±depth_m` around the centre;
+    /// GL conventions and a top-left origin as [`HostCamera::from_pinhole`]. The matrices:
+    /// [`crate::nearfield::select::view::ortho_view_projection`].
     pub fn from_ortho(
         direction: glam::DVec3,
         centre_m: glam::DVec3,
@@ -182,34 +162,15 @@ impl HostCamera {
         height: u32,
         depth_m: f64,
     ) -> Self {
-        let (right, down, forward) = crate::nearfield::rayset::look_at_basis(-direction);
-        let eye = centre_m - forward * (depth_m + 1.0);
-        let cam = crate::nearfield::Camera {
-            position_m: eye,
-            right,
-            down,
-            forward,
-            intrinsics: None,
-            hemisphere: crate::nearfield::Hemisphere::Lower,
-            meta: Default::default(),
-            label: String::new(),
-        };
-        let k = crate::nearfield::Intrinsics {
-            width,
-            height,
-            principal_px: glam::DVec2::new(f64::from(width) / 2.0, f64::from(height) / 2.0),
-            focal_px: glam::DVec2::ONE,
-        };
-        let mut c = Self::from_pinhole(&cam, &k, 1.0, 2.0);
-        let (hw, hh) = (0.5 * f64::from(width) * pixel_m, 0.5 * f64::from(height) * pixel_m);
-        let (n, f) = (1.0f64, 1.0 + 2.0 * depth_m);
-        c.projection = Mat4::from_cols(
-            Vec4::new((1.0 / hw) as f32, 0.0, 0.0, 0.0),
-            Vec4::new(0.0, (1.0 / hh) as f32, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, (-2.0 / (f - n)) as f32, 0.0),
-            Vec4::new(0.0, 0.0, (-(f + n) / (f - n)) as f32, 1.0),
-        );
-        c
+        let (view, projection) =
+            crate::nearfield::select::view::ortho_view_projection(direction, centre_m, pixel_m, width, height, depth_m);
+        HostCamera {
+            view,
+            projection,
+            depth_range: DepthRange::NegOneToOne,
+            reversed_z: false,
+            origin: Origin::TopLeft,
+        }
     }
 }
 

@@ -9,10 +9,10 @@ use glam::{Mat4, Vec4};
 
 use super::camera::HostCamera;
 use super::context::GpuContext;
-use super::meshes;
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, RenderTarget, POSITION_LAYOUT};
 use super::GpuError;
+use crate::photometry::meshes;
 use crate::photometry::Photometry;
 
 /// Width of the luminance table: C from 0 to 360° in 0.5° steps, node-aligned.

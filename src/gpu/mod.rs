@@ -4,9 +4,8 @@
 //! - [`target`]: render targets (colour + depth outputs), export, read-back.
 //! - [`camera`]: the host's matrices and conventions.
 //! - [`farfield`]: the far-field appearance pass and overlays.
-//! - [`meshes`]: CPU geometry of openings, solids and housings.
-//! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles and the
-//!   [`lit_bound`] polygon it draws without a proxy.
+//! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles; the
+//!   CPU geometry it draws and culls with is `nearfield::select` (`lit_bound`, `view`).
 //! - [`shaders`]: the WGSL each pass compiles (generated constants, `shaders/common/`, the pass)
 //!   and the CPU tests (naga) that hold the shader contract.
 //! - [`slots`]: per-draw records at dynamic offsets.
@@ -15,8 +14,6 @@
 pub mod camera;
 pub mod context;
 pub mod farfield;
-pub mod lit_bound;
-pub mod meshes;
 pub mod nearfield;
 pub mod renderer;
 pub mod residency;

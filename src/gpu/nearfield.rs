@@ -16,7 +16,6 @@ use glam::{DVec3, Mat4, Vec4};
 use super::camera::HostCamera;
 use super::context::GpuContext;
 use super::farfield::{OutputMode, RenderOptions};
-use super::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
 use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use super::shaders::CAMERA_RECORD_VEC4S;
 use super::slots::{DrawSlots, SLOT};
@@ -24,6 +23,8 @@ use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFo
 use super::GpuError;
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::pack::Pack;
+use crate::nearfield::select::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
+use crate::nearfield::select::view::{content_radius_m, view_cells};
 use crate::nearfield::select::{Selection, SelectionMode, SelectionOptions};
 
 /// Pool pages a luminaire can bind (the shader declares this many).
@@ -46,7 +47,7 @@ pub struct NearfieldOptions {
     pub content_radius_m: Option<f64>,
     /// Selection-table options.
     pub selection: SelectionOptions,
-    /// Without a proxy, draw the bounding polygon of the pixels that can be lit ([`crate::gpu::lit_bound`])
+    /// Without a proxy, draw the bounding polygon of the pixels that can be lit ([`crate::nearfield::select::lit_bound`])
     /// instead of the content ball's box where it applies. The image is the same either way (the
     /// tests compare them); only the work differs.
     pub bounding_polygon: bool,
@@ -85,31 +86,6 @@ impl Default for NearfieldSettings {
             proxy: true,
         }
     }
-}
-
-/// Radius (m) of a ball around the capture centre holding everything the pack's cameras saw: the
-/// largest `D · tan α` over cameras, where D is the camera's distance from the centre and α the
-/// largest angle from its optical axis to a corner of its kept tiles' bounding box (a point at
-/// distance r from the centre is seen at tan α = r / D by the cameras looking across it), plus 2 %.
-pub fn content_radius_m(pack: &Pack) -> f64 {
-    let set = pack.rayset();
-    let t = f64::from(pack.layout().tile_size);
-    let mut r: f64 = 0.0;
-    for (i, (cam, e)) in set.cameras.iter().zip(pack.images()).enumerate() {
-        if e.bbox.w == 0 || e.bbox.h == 0 {
-            continue;
-        }
-        let k = set.intrinsics_of(i);
-        let d = (cam.position_m - set.sphere.centre_m).length();
-        let (x0, y0) = (f64::from(e.bbox.x0) * t, f64::from(e.bbox.y0) * t);
-        let (x1, y1) = (x0 + f64::from(e.bbox.w) * t, y0 + f64::from(e.bbox.h) * t);
-        for (u, v) in [(x0, y0), (x1, y0), (x0, y1), (x1, y1)] {
-            let ray = k.ray_camera(u, v);
-            let tan = (ray.x * ray.x + ray.y * ray.y).sqrt();
-            r = r.max(d * tan);
-        }
-    }
-    (r * 1.02).min(set.sphere.radius_m * 0.999)
 }
 
 /// A scanned luminaire on the GPU; instances share it.
@@ -247,7 +223,7 @@ impl NearfieldLuminaire {
 
     /// What the pass draws for an instance in `mode` without its proxy, seen from `eye` (luminaire
     /// frame, as in [`Self::cameras_for_view`]) through `clip_from_local` into a `viewport` of pixels:
-    /// the bounding polygons ([`crate::gpu::lit_bound`]) as a triangle list, and which kind they are;
+    /// the bounding polygons ([`crate::nearfield::select::lit_bound`]) as a triangle list, and which kind they are;
     /// an empty list when no pixel can be lit; `None` where the pass draws the content ball's box.
     pub fn bounding_polygon(
         &self,
@@ -333,125 +309,6 @@ impl NearfieldLuminaire {
         }
         self.upload(ctx, uploads, &r.map)
     }
-}
-
-/// The cells of `sel`'s grid that the lines of a view through the content ball reach on the capture
-/// sphere (first intersection of each line). Lines are sampled so that neighbouring samples land at
-/// most `step` apart on the sphere, and every cell within `step` of a sample is taken. With
-/// `clip_from_local`, a sample counts only where its line is inside the view's frustum (the four
-/// side planes) or within twice the sample spacing of it, so that every line the view shows still
-/// has a counted sample within `step`.
-pub fn view_cells(
-    sel: &Selection,
-    sphere: (DVec3, f64),
-    content_radius_m: f64,
-    eye: Vec4,
-    clip_from_local: Option<Mat4>,
-) -> Vec<usize> {
-    let (s, r) = sphere;
-    let rc = content_radius_m.max(1e-6);
-    let (n_phi, n_theta) = sel.grid();
-    let cells = n_phi as usize * n_theta as usize;
-    let cell_rad = std::f64::consts::PI / f64::from(n_theta);
-    let step = 0.5 * cell_rad;
-    let mut mark = vec![false; cells];
-    let cos_i = (1.0 - (rc / r).min(0.995).powi(2)).sqrt();
-    let add = |q: DVec3, mark: &mut Vec<bool>| {
-        let u = (q - s).normalize_or_zero();
-        sel.for_each_cell_near(u, step + 1e-4, |c| mark[c] = true);
-    };
-    let e = eye.truncate().as_dvec3();
-    let first_hit = |p: DVec3, v: DVec3| -> Option<DVec3> {
-        let os = p - s;
-        let b = os.dot(v);
-        let disc = b * b - (os.length_squared() - r * r);
-        (disc >= 0.0).then(|| p + (-b - disc.sqrt()) * v)
-    };
-    // The frustum's side planes (x = ±w, y = ±w in clip space), as (normal, offset) with a unit
-    // normal pointing inwards: for a perspective view they pass through the eye.
-    let planes: Vec<(DVec3, f64)> = clip_from_local
-        .map(|m| {
-            let row = |i: usize| m.row(i).as_dvec4();
-            [row(3) + row(0), row(3) - row(0), row(3) + row(1), row(3) - row(1)]
-                .into_iter()
-                .filter_map(|p| {
-                    let n = p.truncate();
-                    let len = n.length();
-                    (len > 0.0 && len.is_finite()).then(|| (n / len, p.w / len))
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    if eye.w > 0.5 {
-        let to_c = s - e;
-        let dist = to_c.length();
-        if dist <= rc * 1.0001 {
-            return (0..cells).collect();
-        }
-        let axis = to_c / dist;
-        let beta = (rc / dist).min(1.0).asin();
-        let amp = (dist + r) / (r * cos_i);
-        let n_r = ((beta * amp / step).ceil() as usize).clamp(1, 4096);
-        let (bx, by) = orthonormal(axis);
-        // A direction is in view where it is on the inner side of every side plane through the eye;
-        // a plane that misses the eye (a projection translated in clip x or y without w) is left
-        // out, which only keeps more.
-        let through_eye: Vec<DVec3> = planes
-            .iter()
-            .filter(|(n, w)| (n.dot(e) + w).abs() <= 1e-4)
-            .map(|(n, _)| *n)
-            .collect();
-        for k in 0..=n_r {
-            let a = beta * k as f64 / n_r as f64;
-            let n_a = ((std::f64::consts::TAU * a.sin() * amp / step).ceil() as usize).clamp(1, 65_536);
-            // Directions: a sample's neighbours are at most this far away (radians; step / amp
-            // unless the counts were clamped), and a line within twice that of the frustum counts.
-            let spacing = (step / amp)
-                .max(beta / n_r as f64)
-                .max(std::f64::consts::TAU * a.sin() / n_a as f64);
-            let slack = (2.0 * spacing).min(1.0).sin();
-            for m in 0..n_a {
-                let phi = std::f64::consts::TAU * m as f64 / n_a as f64;
-                let d = axis * a.cos() + (bx * phi.cos() + by * phi.sin()) * a.sin();
-                if !through_eye.iter().all(|n| n.dot(d) >= -slack) {
-                    continue;
-                }
-                if let Some(q) = first_hit(e, d) {
-                    add(q, &mut mark);
-                }
-            }
-        }
-    } else {
-        let v = -e.normalize_or_zero();
-        let (bx, by) = orthonormal(v);
-        let spacing = step * r * cos_i;
-        let n = ((rc / spacing).ceil() as i64).clamp(1, 4096);
-        // Parallel lines: a sample's neighbours are rc / n apart (m).
-        let slack = 2.0 * rc / n as f64;
-        let in_view = |p: DVec3| planes.iter().all(|(nrm, w)| nrm.dot(p) + w >= -slack);
-        for i in -n..=n {
-            for j in -n..=n {
-                let (x, y) = (i as f64 * rc / n as f64, j as f64 * rc / n as f64);
-                if x * x + y * y > rc * rc * (1.0 + 2.0 / n as f64) {
-                    continue;
-                }
-                let p = s + bx * x + by * y;
-                if !in_view(p) {
-                    continue;
-                }
-                if let Some(q) = first_hit(p, v) {
-                    add(q, &mut mark);
-                }
-            }
-        }
-    }
-    mark.iter().enumerate().filter(|(_, m)| **m).map(|(i, _)| i).collect()
-}
-
-fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
-    let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    let x = a.cross(t).normalize();
-    (x, a.cross(x))
 }
 
 /// Storage block of one luminaire (`Lum` in shaders/nearfield.wgsl, which documents the members;
@@ -600,7 +457,7 @@ enum DrawGeometry {
     Proxy,
     /// The box around the content ball.
     Box,
-    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::gpu::lit_bound`]).
+    /// Vertices `first..first + count` of the frame's bounding polygons ([`crate::nearfield::select::lit_bound`]).
     Polygon { first: u32, count: u32, kind: PolygonKind },
 }
 

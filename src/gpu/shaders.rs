@@ -13,7 +13,7 @@
 use super::residency::EMPTY;
 use crate::nearfield::select::QUADRATIC_ENTRIES;
 
-/// vec4<u32> per near-field camera record (`NearfieldLuminaire::upload` writes them; `camera()` in
+/// `vec4<u32>` per near-field camera record (`NearfieldLuminaire::upload` writes them; `camera()` in
 /// shaders/nearfield.wgsl reads them): three projection rows, tile box, size and table, position.
 pub const CAMERA_RECORD_VEC4S: usize = 6;
 

@@ -1,6 +1,7 @@
 //! Far-field photometry, pure CPU: IES LM-63 and EULUMDAT readers, the absolute photometric web,
 //! luminous openings and luminance, host-lighting look-up tables, photometric solids, polar plots,
-//! and illuminance on a floor plane with its isolux lines.
+//! illuminance on a floor plane with its isolux lines, and the triangles and lines the renderer
+//! draws for openings, solids and housings (`meshes`).
 //!
 //! ```
 //! use lumiview::photometry::{load_from_text, LoadOptions};
@@ -25,6 +26,7 @@ pub mod isolux;
 pub mod ldt;
 pub mod luminaire;
 pub mod lut;
+pub mod meshes;
 pub mod opening;
 pub mod plot;
 pub mod solid;

@@ -96,10 +96,12 @@
 
 mod gpu;
 mod grid;
+pub mod lit_bound;
 pub mod quadratic;
 mod spherical;
 mod tables;
 mod triangulation;
+pub mod view;
 
 use std::collections::BTreeSet;
 use std::f64::consts::PI;

@@ -296,7 +296,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
                         .map(|v| (glam::DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2])) - c).length())
                         .fold(0.0, f64::max)
                 })
-                .unwrap_or_else(|| lumiview::gpu::nearfield::content_radius_m(&pack));
+                .unwrap_or_else(|| lumiview::nearfield::select::view::content_radius_m(&pack));
             let half = f64::from(fov_given).to_radians() / 2.0;
             let eye_distance = (2.0 * reach / half.tan()).max(0.02);
             // A source too small to fill half the view from 2 cm gets a narrower view instead.

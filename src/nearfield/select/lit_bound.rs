@@ -26,8 +26,9 @@
 use glam::{DVec2, DVec3, Mat4, Vec2, Vec3, Vec4};
 use rayon::prelude::*;
 
+use super::view::orthonormal;
+use super::{Selection, SelectionMode};
 use crate::nearfield::pack::{Pack, EMPTY_TILE};
-use crate::nearfield::select::{Selection, SelectionMode};
 use crate::nearfield::{NearfieldError, RayImageSet};
 
 /// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
@@ -746,12 +747,6 @@ fn grow_triangle(p: [Vec2; 3], d: f32) -> Option<Vec<Vec2>> {
         out.push(a0 + t0 * u);
     }
     Some(out)
-}
-
-fn orthonormal(a: DVec3) -> (DVec3, DVec3) {
-    let t = if a.x.abs() < 0.9 { DVec3::X } else { DVec3::Y };
-    let x = a.cross(t).normalize();
-    (x, a.cross(x))
 }
 
 /// The intersection of two convex polygons (either orientation): `subject` clipped by each edge of
