@@ -214,6 +214,27 @@ static inline void lumi_vk_release_import(VkDevice device, VkImage *image, VkDev
     *memory = VK_NULL_HANDLE;
 }
 
+/* One queue-family ownership transfer of an imported image (the acquire and the release below). */
+static inline void lumi_vk__transfer(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t src_family,
+                                     uint32_t dst_family, VkImageLayout old_layout, VkImageLayout new_layout,
+                                     VkPipelineStageFlags src_stage, VkAccessFlags src_access,
+                                     VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
+    VkImageMemoryBarrier b;
+    memset(&b, 0, sizeof b);
+    b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+    b.srcAccessMask = src_access;
+    b.dstAccessMask = dst_access;
+    b.oldLayout = old_layout;
+    b.newLayout = new_layout;
+    b.srcQueueFamilyIndex = src_family;
+    b.dstQueueFamilyIndex = dst_family;
+    b.image = image;
+    b.subresourceRange.aspectMask = lumi_vk_aspect(e);
+    b.subresourceRange.levelCount = 1;
+    b.subresourceRange.layerCount = 1;
+    vkCmdPipelineBarrier(cmd, src_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
+}
+
 /* Records the acquire of an imported image from lumiview: a queue-family ownership transfer from
  * VK_QUEUE_FAMILY_EXTERNAL to `queue_family`, layout `e->vk_layout` → `new_layout`, with no source
  * access (lumiview's release made its writes available) and destination `dst_stage` / `dst_access`
@@ -224,20 +245,8 @@ static inline void lumi_vk_release_import(VkDevice device, VkImage *image, VkDev
 static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t queue_family,
                                        VkImageLayout new_layout, VkPipelineStageFlags dst_stage,
                                        VkAccessFlags dst_access) {
-    VkImageMemoryBarrier b;
-    memset(&b, 0, sizeof b);
-    b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-    b.srcAccessMask = 0;
-    b.dstAccessMask = dst_access;
-    b.oldLayout = (VkImageLayout)e->vk_layout;
-    b.newLayout = new_layout;
-    b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL;
-    b.dstQueueFamilyIndex = queue_family;
-    b.image = image;
-    b.subresourceRange.aspectMask = lumi_vk_aspect(e);
-    b.subresourceRange.levelCount = 1;
-    b.subresourceRange.layerCount = 1;
-    vkCmdPipelineBarrier(cmd, dst_stage, dst_stage, 0, 0, NULL, 0, NULL, 1, &b);
+    lumi_vk__transfer(cmd, e, image, VK_QUEUE_FAMILY_EXTERNAL, queue_family, (VkImageLayout)e->vk_layout, new_layout,
+                      dst_stage, 0, dst_stage, dst_access);
 }
 
 /* Records the release of an imported image back to lumiview after the host's use: ownership from
@@ -248,20 +257,8 @@ static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e
 static inline void lumi_vk_cmd_release(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t queue_family,
                                        VkImageLayout old_layout, VkPipelineStageFlags src_stage,
                                        VkAccessFlags src_access) {
-    VkImageMemoryBarrier b;
-    memset(&b, 0, sizeof b);
-    b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-    b.srcAccessMask = src_access;
-    b.dstAccessMask = 0;
-    b.oldLayout = old_layout;
-    b.newLayout = (VkImageLayout)e->vk_layout;
-    b.srcQueueFamilyIndex = queue_family;
-    b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_EXTERNAL;
-    b.image = image;
-    b.subresourceRange.aspectMask = lumi_vk_aspect(e);
-    b.subresourceRange.levelCount = 1;
-    b.subresourceRange.layerCount = 1;
-    vkCmdPipelineBarrier(cmd, src_stage, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0, 0, NULL, 0, NULL, 1, &b);
+    lumi_vk__transfer(cmd, e, image, queue_family, VK_QUEUE_FAMILY_EXTERNAL, old_layout, (VkImageLayout)e->vk_layout,
+                      src_stage, src_access, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0);
 }
 
 /* Imports one of a target's semaphores (`lumi_target_export_semaphores`) into `device` (which has

@@ -177,33 +177,16 @@ fn from_a_capture_camera_every_mode_reproduces_its_image() {
 
 /// Colour and depth bytes of a frame.
 fn render_bytes(r: &mut Renderer, cam: &Camera, k: &Intrinsics) -> (Vec<u8>, Vec<u8>) {
-    let mut t = lumiview::gpu::RenderTarget::new(
-        &r.ctx,
-        &TargetDesc {
-            width: k.width,
-            height: k.height,
-            color: ColorFormat::Rgba32Float,
-            depth: DepthFormat::R32Float,
-            exportable: false,
-            semaphores: false,
-        },
-    )
-    .unwrap();
-    let hc = HostCamera::from_pinhole(cam, k, 0.01, 20.0);
-    r.render(&mut t, &hc, &RenderOptions::default()).unwrap();
-    (
-        t.read(&r.ctx, Attachment::Color).unwrap(),
-        t.read(&r.ctx, Attachment::Depth).unwrap(),
-    )
+    render_host_bytes(r, &HostCamera::from_pinhole(cam, k, 0.01, 20.0), k.width, k.height)
 }
 
-/// Colour (red channel) of a frame from `hc` into a `size`² RGBA32F target.
-fn render_host(r: &mut Renderer, hc: &HostCamera, size: u32) -> Vec<f32> {
+/// Colour (RGBA32F) and depth (R32F) bytes of a `width` × `height` frame seen by `hc`.
+fn render_host_bytes(r: &mut Renderer, hc: &HostCamera, width: u32, height: u32) -> (Vec<u8>, Vec<u8>) {
     let mut t = lumiview::gpu::RenderTarget::new(
         &r.ctx,
         &TargetDesc {
-            width: size,
-            height: size,
+            width,
+            height,
             color: ColorFormat::Rgba32Float,
             depth: DepthFormat::R32Float,
             exportable: false,
@@ -212,7 +195,15 @@ fn render_host(r: &mut Renderer, hc: &HostCamera, size: u32) -> Vec<f32> {
     )
     .unwrap();
     r.render(&mut t, hc, &RenderOptions::default()).unwrap();
-    let px = t.read(&r.ctx, Attachment::Color).unwrap();
+    (
+        t.read(&r.ctx, Attachment::Color).unwrap(),
+        t.read(&r.ctx, Attachment::Depth).unwrap(),
+    )
+}
+
+/// Colour (red channel) of a frame from `hc` into a `size`² RGBA32F target.
+fn render_host(r: &mut Renderer, hc: &HostCamera, size: u32) -> Vec<f32> {
+    let (px, _) = render_host_bytes(r, hc, size, size);
     bytemuck::cast_slice::<u8, f32>(&px).chunks(4).map(|c| c[0]).collect()
 }
 

@@ -140,6 +140,11 @@ impl HostCamera {
         far_m: f32,
     ) -> Self {
         let (view, projection) = crate::nearfield::select::view::pinhole_view_projection(cam, k, near_m, far_m);
+        Self::gl_top_left(view, projection)
+    }
+
+    /// A GL-convention camera (clip z in −w…w, no reversed Z) with a top-left origin.
+    fn gl_top_left(view: Mat4, projection: Mat4) -> Self {
         HostCamera {
             view,
             projection,
@@ -164,13 +169,7 @@ impl HostCamera {
     ) -> Self {
         let (view, projection) =
             crate::nearfield::select::view::ortho_view_projection(direction, centre_m, pixel_m, width, height, depth_m);
-        HostCamera {
-            view,
-            projection,
-            depth_range: DepthRange::NegOneToOne,
-            reversed_z: false,
-            origin: Origin::TopLeft,
-        }
+        Self::gl_top_left(view, projection)
     }
 }
 

@@ -13,13 +13,13 @@
 //!   equirectangular map (φ across, θ up: zenith at the top) of the angle to the nearest camera,
 //!   with a colour bar.
 
-use ab_glyph::{point, Font, FontRef, Glyph, PxScale, ScaleFont};
 use glam::DVec3;
 use rayon::prelude::*;
 use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, StrokeDash, Transform};
 
 use super::error::{NearfieldError, Result};
 use super::rayset::{Hemisphere, RayImageSet};
+use crate::draw::text::{Anchor, Typeface, FONT_PATH};
 
 /// Uniformly spread directions (a Fibonacci sphere) over which the gap statistics are taken.
 pub const STATS_SAMPLES: usize = 1 << 18;
@@ -32,9 +32,6 @@ pub const MAX_WIDTH_PX: u32 = 8192;
 
 /// Points per k-d tree leaf.
 const LEAF: usize = 8;
-
-/// The bundled font (DejaVu Sans, `assets/fonts/DejaVuSans-LICENSE.txt`), as the polar plot uses.
-const FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Great-circle angle (rad) of the chord between two unit vectors, from its squared length.
 fn chord2_to_angle(c2: f64) -> f64 {
@@ -354,7 +351,7 @@ impl Coverage {
     }
 
     fn draw(&self, width_px: u32) -> Result<Pixmap> {
-        let face = Face::load()?;
+        let face = Typeface::load().map_err(|e| NearfieldError::format(FONT_PATH, e))?;
         let s = f64::from(width_px) / 1600.0;
         let height_px = (620.0 * s).round() as u32;
         let mut pm = Pixmap::new(width_px, height_px).ok_or_else(|| {
@@ -458,7 +455,7 @@ impl Coverage {
     fn draw_disc(
         &self,
         pm: &mut Pixmap,
-        face: &Face,
+        face: &Typeface,
         centre: [f64; 2],
         radius: f64,
         pole: DVec3,
@@ -581,7 +578,7 @@ impl Coverage {
         face.text(pm, "C270", centre[0], c270y, size, [30, 30, 30, 255], Anchor::Middle);
     }
 
-    fn draw_map(&self, pm: &mut Pixmap, face: &Face, s: f64) {
+    fn draw_map(&self, pm: &mut Pixmap, face: &Typeface, s: f64) {
         let id = Transform::identity();
         let ink = [30, 30, 30, 255];
         let (x0, y0) = ((890.0 * s).round(), (150.0 * s).round());
@@ -878,87 +875,6 @@ fn paint(c: [u8; 4]) -> Paint<'static> {
     p.set_color_rgba8(c[0], c[1], c[2], c[3]);
     p.anti_alias = true;
     p
-}
-
-/// Horizontal anchor of a text line.
-#[derive(Debug, Clone, Copy)]
-enum Anchor {
-    Start,
-    Middle,
-    End,
-}
-
-/// The bundled font with layout and drawing (ab_glyph coverage blended source-over, as the polar
-/// plot's rasteriser does).
-struct Face {
-    font: FontRef<'static>,
-}
-
-impl Face {
-    fn load() -> Result<Self> {
-        FontRef::try_from_slice(FONT_TTF)
-            .map(|font| Self { font })
-            .map_err(|e| NearfieldError::format("assets/fonts/DejaVuSans.ttf", format!("bundled font: {e}")))
-    }
-
-    /// ab_glyph scales to ascent − descent; convert an em size to that.
-    fn px_scale(&self, size: f64) -> PxScale {
-        let upem = self.font.units_per_em().unwrap_or(2048.0);
-        PxScale::from(size as f32 * self.font.height_unscaled() / upem)
-    }
-
-    fn layout(&self, text: &str, size: f64) -> (Vec<Glyph>, f64) {
-        let scale = self.px_scale(size);
-        let scaled = self.font.as_scaled(scale);
-        let mut glyphs = Vec::with_capacity(text.len());
-        let mut x = 0.0f32;
-        let mut prev = None;
-        for ch in text.chars() {
-            let id = scaled.glyph_id(ch);
-            if let Some(p) = prev {
-                x += scaled.kern(p, id);
-            }
-            glyphs.push(id.with_scale_and_position(scale, point(x, 0.0)));
-            x += scaled.h_advance(id);
-            prev = Some(id);
-        }
-        (glyphs, f64::from(x))
-    }
-
-    /// Draws one line of text with its baseline at `y`.
-    #[allow(clippy::too_many_arguments)]
-    fn text(&self, pm: &mut Pixmap, text: &str, x: f64, y: f64, size: f64, colour: [u8; 4], anchor: Anchor) {
-        let (glyphs, width) = self.layout(text, size);
-        let x0 = match anchor {
-            Anchor::Start => x,
-            Anchor::Middle => x - width / 2.0,
-            Anchor::End => x - width,
-        };
-        let (w, h) = (i64::from(pm.width()), i64::from(pm.height()));
-        let alpha = f32::from(colour[3]) / 255.0;
-        let data = pm.data_mut();
-        for mut g in glyphs {
-            g.position = point(g.position.x + x0 as f32, y as f32);
-            let Some(outline) = self.font.outline_glyph(g) else {
-                continue;
-            };
-            let bounds = outline.px_bounds();
-            let (bx, by) = (bounds.min.x as i64, bounds.min.y as i64);
-            outline.draw(|gx, gy, coverage| {
-                let (px, py) = (bx + i64::from(gx), by + i64::from(gy));
-                let a = coverage.clamp(0.0, 1.0) * alpha;
-                if px < 0 || py < 0 || px >= w || py >= h || a <= 0.0 {
-                    return;
-                }
-                let i = ((py * w + px) * 4) as usize;
-                for k in 0..3 {
-                    let src = f32::from(colour[k]) * a;
-                    data[i + k] = (src + f32::from(data[i + k]) * (1.0 - a)).round().min(255.0) as u8;
-                }
-                data[i + 3] = (255.0 * a + f32::from(data[i + 3]) * (1.0 - a)).round().min(255.0) as u8;
-            });
-        }
-    }
 }
 
 #[cfg(test)]

@@ -24,7 +24,7 @@ mod svg;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use ab_glyph::{point, Font, FontRef, Glyph, PxScale, ScaleFont};
+use crate::draw::text::Typeface;
 use tiny_skia::Pixmap;
 
 use self::layout::{
@@ -33,10 +33,6 @@ use self::layout::{
 use super::luminaire::Photometry;
 
 pub use self::isolux::{write_isolux, ContourLabel, IsoluxPlot, IsoluxPlotOptions};
-
-/// The bundled font (DejaVu Sans, see `assets/fonts/DejaVuSans-LICENSE.txt`): every label is
-/// measured with it and the PNG's text is rasterised from it.
-const FONT_TTF: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Smallest accepted image width in pixels.
 pub const MIN_SIZE_PX: u32 = 320;
@@ -411,68 +407,9 @@ pub struct PolarPlot {
     scene: Scene,
 }
 
-/// The bundled font, with measuring helpers.
-struct Typeface {
-    font: FontRef<'static>,
-}
-
-impl Typeface {
-    fn load() -> Result<Self, PlotError> {
-        FontRef::try_from_slice(FONT_TTF)
-            .map(|font| Typeface { font })
-            .map_err(|e| PlotError::Render {
-                message: format!("bundled font assets/fonts/DejaVuSans.ttf: {e}"),
-            })
-    }
-
-    /// ab_glyph scales to ascent − descent; convert an em size to that.
-    fn px_scale(&self, size: f64) -> PxScale {
-        let upem = self.font.units_per_em().unwrap_or(2048.0);
-        PxScale::from(size as f32 * self.font.height_unscaled() / upem)
-    }
-
-    /// Glyphs of `text` laid out (with kerning) from x = 0 on the baseline y = 0, and the advance
-    /// width.
-    fn layout(&self, text: &str, size: f64) -> (Vec<Glyph>, f64) {
-        let scale = self.px_scale(size);
-        let scaled = self.font.as_scaled(scale);
-        let mut glyphs = Vec::with_capacity(text.len());
-        let mut x = 0.0f32;
-        let mut prev = None;
-        for ch in text.chars() {
-            let id = scaled.glyph_id(ch);
-            if let Some(p) = prev {
-                x += scaled.kern(p, id);
-            }
-            glyphs.push(id.with_scale_and_position(scale, point(x, 0.0)));
-            x += scaled.h_advance(id);
-            prev = Some(id);
-        }
-        (glyphs, f64::from(x))
-    }
-
-    fn width(&self, text: &str, size: f64) -> f64 {
-        self.layout(text, size).1
-    }
-
-    /// Shrinks (to 85 %) and then shortens with an ellipsis until `text` fits `max_width`.
-    fn fit(&self, text: &str, size: f64, max_width: f64) -> (String, f64) {
-        if self.width(text, size) <= max_width {
-            return (text.to_string(), size);
-        }
-        let small = size * 0.85;
-        if self.width(text, small) <= max_width {
-            return (text.to_string(), small);
-        }
-        let mut chars: Vec<char> = text.chars().collect();
-        while chars.pop().is_some() {
-            let candidate = format!("{}…", chars.iter().collect::<String>().trim_end());
-            if self.width(&candidate, small) <= max_width {
-                return (candidate, small);
-            }
-        }
-        ("…".to_string(), small)
-    }
+/// The bundled font ([`crate::draw::text`]), its error as the plot's.
+fn typeface() -> Result<Typeface, PlotError> {
+    Typeface::load().map_err(|message| PlotError::Render { message })
 }
 
 impl PolarPlot {
@@ -486,7 +423,7 @@ impl PolarPlot {
         if !(MIN_SIZE_PX..=MAX_SIZE_PX).contains(&opts.size_px) {
             return Err(PlotError::Size { size: opts.size_px });
         }
-        let face = Typeface::load()?;
+        let face = typeface()?;
         let spokes = spoke_labels();
         let lay = Layout::new(f64::from(opts.size_px), |size| {
             spokes.iter().map(|(_, _, t)| face.width(t, size)).fold(0.0, f64::max)
@@ -595,7 +532,7 @@ impl PolarPlot {
     /// # Errors
     /// [`PlotError::Render`] if the pixmap cannot be allocated.
     pub fn to_pixmap(&self) -> Result<Pixmap, PlotError> {
-        raster::render(self.width, self.height, &self.scene, &Typeface::load()?)
+        raster::render(self.width, self.height, &self.scene, &typeface()?)
     }
 
     /// The diagram as PNG file bytes (8-bit RGBA).
@@ -887,7 +824,8 @@ mod tests {
 
     #[test]
     fn the_font_has_the_glyphs_used() {
-        let face = Typeface::load().map_err(|e| e.to_string());
+        use ab_glyph::Font;
+        let face = typeface().map_err(|e| e.to_string());
         assert!(face.is_ok(), "{:?}", face.as_ref().err());
         if let Ok(face) = face {
             for ch in "0123456789°γ–·…\u{a0}cd/klmC()".chars() {

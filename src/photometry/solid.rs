@@ -13,6 +13,8 @@
 
 use serde_json::json;
 
+use crate::draw::glb;
+
 use super::error::PhotometryError;
 use super::lut::c_mean;
 use super::web::{direction, PhotometricWeb};
@@ -301,23 +303,12 @@ impl PhotometricSolid {
         let pos: Vec<[f32; 3]> = self.positions.iter().map(|&p| to_gltf_axes(p)).collect();
         let nrm: Vec<[f32; 3]> = self.normals.iter().map(|&n| to_gltf_axes(n)).collect();
         let (min, max) = bounds_of(pos.iter().copied());
-        let mut bin: Vec<u8> = Vec::with_capacity(pos.len() * 24 + self.indices.len() * 4);
-        for p in &pos {
-            for x in p {
-                bin.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-        let normals_offset = bin.len();
-        for n in &nrm {
-            for x in n {
-                bin.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-        let indices_offset = bin.len();
-        for i in &self.indices {
-            bin.extend_from_slice(&i.to_le_bytes());
-        }
-        let bin_len = bin.len();
+        let bytes = |v: &[[f32; 3]]| v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        let mut buf = glb::Buffer::new();
+        buf.push_view(&bytes(&pos), glb::ARRAY_BUFFER);
+        buf.push_view(&bytes(&nrm), glb::ARRAY_BUFFER);
+        let idx: Vec<u8> = self.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        buf.push_view(&idx, glb::ELEMENT_ARRAY_BUFFER);
         let o = &self.options;
         let doc = json!({
             "asset": {
@@ -365,37 +356,10 @@ impl PhotometricSolid {
                     "type": "SCALAR",
                 },
             ],
-            "bufferViews": [
-                {"buffer": 0, "byteOffset": 0, "byteLength": normals_offset, "target": 34962},
-                {"buffer": 0, "byteOffset": normals_offset, "byteLength": indices_offset - normals_offset, "target": 34962},
-                {"buffer": 0, "byteOffset": indices_offset, "byteLength": bin_len - indices_offset, "target": 34963},
-            ],
-            "buffers": [{"byteLength": bin_len}],
+            "bufferViews": buf.views(),
+            "buffers": [{"byteLength": buf.len()}],
         });
-        let mut json_bytes =
-            serde_json::to_vec(&doc).map_err(|e| invalid("solid", format!("cannot encode glTF JSON: {e}")))?;
-        while json_bytes.len() % 4 != 0 {
-            json_bytes.push(b' ');
-        }
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
-        }
-        let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
-        let too_big = || invalid("solid", "the mesh is too large for a GLB file (4 GiB)");
-        let total32 = u32::try_from(total).map_err(|_| too_big())?;
-        let json_len = u32::try_from(json_bytes.len()).map_err(|_| too_big())?;
-        let bin_len32 = u32::try_from(bin.len()).map_err(|_| too_big())?;
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&total32.to_le_bytes());
-        out.extend_from_slice(&json_len.to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json_bytes);
-        out.extend_from_slice(&bin_len32.to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-        Ok(out)
+        buf.into_glb(&doc).map_err(|m| invalid("solid", m))
     }
 }
 

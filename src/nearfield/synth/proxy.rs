@@ -8,6 +8,7 @@ use std::path::Path;
 use glam::DVec3;
 use serde_json::json;
 
+use crate::draw::glb;
 use crate::nearfield::error::{NearfieldError, Result};
 use crate::photometry::solid::to_gltf_axes;
 
@@ -97,18 +98,9 @@ impl ProxyMesh {
     /// Errors: a surface whose indices point past its vertices, or a mesh over 4 GiB.
     pub fn to_glb(&self) -> Result<Vec<u8>> {
         let bad = |m: String| NearfieldError::invalid("proxy mesh", m);
-        let mut bin: Vec<u8> = Vec::new();
+        let mut buf = glb::Buffer::new();
         let mut accessors = Vec::new();
-        let mut views = Vec::new();
         let mut primitives = Vec::new();
-        let push_view = |bin: &mut Vec<u8>, views: &mut Vec<serde_json::Value>, data: &[u8], target: u32| {
-            while !bin.len().is_multiple_of(4) {
-                bin.push(0);
-            }
-            views.push(json!({"buffer": 0, "byteOffset": bin.len(), "byteLength": data.len(), "target": target}));
-            bin.extend_from_slice(data);
-            views.len() - 1
-        };
         for s in &self.surfaces {
             if s.positions.len() != s.normals.len() || s.indices.len() % 3 != 0 {
                 return Err(bad(format!(
@@ -137,10 +129,10 @@ impl ProxyMesh {
                 }
             }
             let bytes = |v: &[[f32; 3]]| v.iter().flatten().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
-            let pv = push_view(&mut bin, &mut views, &bytes(&pos), 34962);
-            let nv = push_view(&mut bin, &mut views, &bytes(&nrm), 34962);
+            let pv = buf.push_view(&bytes(&pos), glb::ARRAY_BUFFER);
+            let nv = buf.push_view(&bytes(&nrm), glb::ARRAY_BUFFER);
             let idx: Vec<u8> = s.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-            let iv = push_view(&mut bin, &mut views, &idx, 34963);
+            let iv = buf.push_view(&idx, glb::ELEMENT_ARRAY_BUFFER);
             let a0 = accessors.len();
             accessors.push(
                 json!({"bufferView": pv, "componentType": 5126, "count": pos.len(), "type": "VEC3",
@@ -155,9 +147,6 @@ impl ProxyMesh {
                 "mode": 4,
                 "extras": {"surface": s.name},
             }));
-        }
-        while !bin.len().is_multiple_of(4) {
-            bin.push(0);
         }
         let doc = json!({
             "asset": {
@@ -176,29 +165,10 @@ impl ProxyMesh {
             "nodes": [{"mesh": 0, "name": self.name}],
             "meshes": [{"name": self.name, "primitives": primitives}],
             "accessors": accessors,
-            "bufferViews": views,
-            "buffers": [{"byteLength": bin.len()}],
+            "bufferViews": buf.views(),
+            "buffers": [{"byteLength": buf.len()}],
         });
-        let mut json_bytes = serde_json::to_vec(&doc).map_err(|e| bad(format!("cannot encode glTF JSON: {e}")))?;
-        while json_bytes.len() % 4 != 0 {
-            json_bytes.push(b' ');
-        }
-        let total = 12 + 8 + json_bytes.len() + 8 + bin.len();
-        let too_big = || bad("the mesh is too large for a GLB file (4 GiB)".into());
-        let total32 = u32::try_from(total).map_err(|_| too_big())?;
-        let json_len = u32::try_from(json_bytes.len()).map_err(|_| too_big())?;
-        let bin_len = u32::try_from(bin.len()).map_err(|_| too_big())?;
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&total32.to_le_bytes());
-        out.extend_from_slice(&json_len.to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&json_bytes);
-        out.extend_from_slice(&bin_len.to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&bin);
-        Ok(out)
+        buf.into_glb(&doc).map_err(bad)
     }
 
     /// Writes [`ProxyMesh::to_glb`] to `path`.

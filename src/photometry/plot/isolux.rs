@@ -24,8 +24,9 @@ use std::path::Path;
 
 use super::layout::Bounds;
 use super::{
-    file_name, label, raster, svg, title_of, trim_number, wrap_parts, LineStyle, PlotError, PlotFormat, RasterImage,
-    Rgba, Scene, Shape, TextAnchor, Typeface, CAP_HEIGHT, GREY_TEXT, INK, MAX_SIZE_PX, MIN_SIZE_PX, RED, SEP, WHITE,
+    file_name, label, raster, svg, title_of, trim_number, typeface, wrap_parts, LineStyle, PlotError, PlotFormat,
+    RasterImage, Rgba, Scene, Shape, TextAnchor, Typeface, CAP_HEIGHT, GREY_TEXT, INK, MAX_SIZE_PX, MIN_SIZE_PX, RED,
+    SEP, WHITE,
 };
 use crate::photometry::isolux::{IsoluxContour, IsoluxGrid, MaxPoint};
 use crate::photometry::luminaire::Photometry;
@@ -150,7 +151,7 @@ impl IsoluxPlot {
                 height_m: grid.height_m,
             });
         }
-        let face = Typeface::load()?;
+        let face = typeface()?;
         let half_width_m = grid.half_width_m();
         let tick_step_m = tick_step(2.0 * half_width_m);
         let ticks = tick_values(half_width_m, tick_step_m);
@@ -279,7 +280,7 @@ impl IsoluxPlot {
     /// # Errors
     /// [`PlotError::Render`] if the pixmap cannot be allocated.
     pub fn to_pixmap(&self) -> Result<Pixmap, PlotError> {
-        raster::render(self.width, self.height, &self.scene, &Typeface::load()?)
+        raster::render(self.width, self.height, &self.scene, &typeface()?)
     }
 
     /// The diagram as PNG file bytes (8-bit RGBA).

@@ -4,7 +4,7 @@
 
 use tiny_skia::Pixmap;
 
-use super::{raster, LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor, Typeface};
+use super::{raster, typeface, LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor};
 
 /// A logarithmic scale bar.
 pub struct ScaleBar<'a> {
@@ -79,7 +79,7 @@ impl ScaleBar<'_> {
                 ),
             });
         }
-        let face = Typeface::load()?;
+        let face = typeface()?;
         let w = f64::from(self.width_px);
         let text = (w / 60.0).clamp(10.0, 16.0);
         let margin = 1.2 * text;
