@@ -201,6 +201,23 @@ fn render_host_bytes(r: &mut Renderer, hc: &HostCamera, width: u32, height: u32)
     )
 }
 
+/// Adds `pack` drawn without bounding polygons (the content ball's box where there is no proxy).
+fn add_boxed(r: &mut Renderer, pack: Arc<Pack>) -> lumiview::gpu::LuminaireId {
+    let opts = NearfieldOptions {
+        bounding_polygon: false,
+        ..NearfieldOptions::default()
+    };
+    r.add_pack(pack, None, &opts).unwrap()
+}
+
+/// The near-field luminaire `id` names.
+fn nearfield_of(r: &Renderer, id: lumiview::gpu::LuminaireId) -> Arc<lumiview::gpu::nearfield::NearfieldLuminaire> {
+    match r.luminaire(id).unwrap() {
+        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
+        _ => panic!("not a near-field luminaire"),
+    }
+}
+
 /// Colour (red channel) of a frame from `hc` into a `size`² RGBA32F target.
 fn render_host(r: &mut Renderer, hc: &HostCamera, size: u32) -> Vec<f32> {
     let (px, _) = render_host_bytes(r, hc, size, size);
@@ -219,20 +236,8 @@ fn box_from_inside_is_drawn_for_every_origin_and_mirrored_models() {
         return;
     };
     let (pack, _) = packed("disc", 200, 64);
-    let id = r
-        .add_pack(
-            pack,
-            None,
-            &NearfieldOptions {
-                bounding_polygon: false,
-                ..NearfieldOptions::default()
-            },
-        )
-        .unwrap();
-    let lum = match r.luminaire(id).unwrap() {
-        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
-        _ => panic!("not a near-field luminaire"),
-    };
+    let id = add_boxed(&mut r, pack);
+    let lum = nearfield_of(&r, id);
     // Inside the box (a corner region), outside the ball, looking at the disc from below.
     let eye = lum.sphere.0 + DVec3::new(0.45, -0.3, -0.8) * lum.content_radius_m;
     let (cam, k) = eye_camera(eye, 64, 90.0);
@@ -299,22 +304,10 @@ fn bounding_polygon_renders_what_the_box_renders() {
     };
     let (pack, _) = packed("star-panel", 300, 96);
     let tight = r.add_pack(pack.clone(), None, &NearfieldOptions::default()).unwrap();
-    let boxed = r
-        .add_pack(
-            pack,
-            None,
-            &NearfieldOptions {
-                bounding_polygon: false,
-                ..NearfieldOptions::default()
-            },
-        )
-        .unwrap();
+    let boxed = add_boxed(&mut r, pack);
     // (eye, point looked at, field of view in degrees; None: the content, about 0.3 m across, framed).
     let o = DVec3::ZERO;
-    let lum = match r.luminaire(tight).unwrap() {
-        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
-        _ => panic!("not a near-field luminaire"),
-    };
+    let lum = nearfield_of(&r, tight);
     // An eye inside the content ball's box but outside the ball (the box's corner), looking away
     // from the luminaire: the box is drawn there, and no line it shows meets the ball in front.
     let corner = lum.sphere.0 + DVec3::new(0.8, -0.8, 0.8) * lum.content_radius_m;
@@ -435,10 +428,7 @@ fn streaming_under_a_quarter_budget_renders_the_resident_image() {
             },
         )
         .unwrap();
-    let small_lum = match r.luminaire(small).unwrap() {
-        lumiview::gpu::renderer::Luminaire::Nearfield(n) => n.clone(),
-        _ => unreachable!(),
-    };
+    let small_lum = nearfield_of(&r, small);
     assert!(!small_lum.fully_resident);
     // Close-ups of the panel's corners from inside the capture sphere and from outside first, while
     // little is resident (their residency keeps only the cameras of the lines inside the frustum, and
