@@ -50,9 +50,9 @@ impl EvalMode {
     /// Short label.
     pub fn label(self) -> &'static str {
         match self {
-            EvalMode::Nearest => "nearest",
-            EvalMode::Idw4 => "idw4",
-            EvalMode::Continuous => "continuous",
+            EvalMode::Nearest => SelectionMode::Nearest.name(),
+            EvalMode::Idw4 => SelectionMode::Idw4.name(),
+            EvalMode::Continuous => SelectionMode::Continuous.name(),
             EvalMode::ContinuousProxy => "continuous+proxy",
         }
     }

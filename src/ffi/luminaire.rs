@@ -45,19 +45,21 @@ struct SelectionArg(SelectionMode);
 impl TryFrom<u32> for SelectionArg {
     type Error = FfiError;
     fn try_from(v: u32) -> Result<Self, FfiError> {
-        Ok(SelectionArg(match v {
-            LUMI_SELECTION_NEAREST => SelectionMode::Nearest,
-            LUMI_SELECTION_IDW4 => SelectionMode::Idw4,
-            LUMI_SELECTION_CONTINUOUS => SelectionMode::Continuous,
-            v => {
-                return Err(FfiError::invalid(
-                    "selection_mode",
-                    format!("unknown value {v} (LUMI_SELECTION_NEAREST 0, _IDW4 1, _CONTINUOUS 2)"),
-                ))
-            }
-        }))
+        SelectionMode::from_index(v).map(SelectionArg).ok_or_else(|| {
+            FfiError::invalid(
+                "selection_mode",
+                format!("unknown value {v} (LUMI_SELECTION_NEAREST 0, _IDW4 1, _CONTINUOUS 2)"),
+            )
+        })
     }
 }
+
+// The C constants are literals (cbindgen copies them into the header); they are the modes' indices.
+const _: () = assert!(
+    LUMI_SELECTION_NEAREST == SelectionMode::Nearest.index()
+        && LUMI_SELECTION_IDW4 == SelectionMode::Idw4.index()
+        && LUMI_SELECTION_CONTINUOUS == SelectionMode::Continuous.index()
+);
 
 /// Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 pub const LUMI_OPENING_POINT: u32 = 0;

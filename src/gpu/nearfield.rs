@@ -1013,11 +1013,7 @@ impl NearfieldPass {
             } else {
                 true
             };
-            let mode = match settings.mode {
-                SelectionMode::Nearest => 0,
-                SelectionMode::Idw4 => 1,
-                SelectionMode::Continuous => 2,
-            };
+            let mode = settings.mode.index();
             let (geometry, cull) = match (proxy, bound, outside) {
                 (true, _, _) => (DrawGeometry::Proxy, None),
                 // No selectable camera has light in the view.

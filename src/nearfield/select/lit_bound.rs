@@ -232,11 +232,7 @@ impl LitDirections {
         if n == DVec3::ZERO {
             return None;
         }
-        let m = match mode {
-            SelectionMode::Nearest => 0,
-            SelectionMode::Idw4 => 1,
-            SelectionMode::Continuous => 2,
-        };
+        let m = mode.index() as usize;
         // Lines leave the eye towards their first hit from outside the sphere, away from it inside.
         let sign = if (e - centre).length() > r_s { 1.0 } else { -1.0 };
         let project = |d: DVec3| -> Option<Vec2> {
@@ -382,11 +378,7 @@ impl LitDirections {
             alpha = alpha.max(q.normalize().dot(axis).clamp(-1.0, 1.0).acos());
         }
         alpha += 1e-3;
-        let m = match mode {
-            SelectionMode::Nearest => 0,
-            SelectionMode::Idw4 => 1,
-            SelectionMode::Continuous => 2,
-        };
+        let m = mode.index() as usize;
         let dirs = sel.vertex_directions();
         // angle(u, axis) ≤ α + ρ as cos(angle) ≥ cos α cos ρ − sin α sin ρ (no arccosine per vertex).
         let (ca, sa) = (alpha.cos(), alpha.sin());

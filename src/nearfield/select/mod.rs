@@ -131,6 +131,42 @@ pub enum SelectionMode {
     Continuous,
 }
 
+impl SelectionMode {
+    /// Every mode, in index order. Adding a mode: this enum and its three functions below, the
+    /// shader's branches on `SELECTION` (shaders/nearfield.wgsl) and the C API's `LUMI_SELECTION_*`
+    /// constant (src/ffi/luminaire.rs, checked against [`SelectionMode::index`] at compile time).
+    pub const ALL: [SelectionMode; 3] = [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous];
+
+    /// The mode's one number: the near-field shader's `SELECTION` pipeline constant and the C API's
+    /// `LUMI_SELECTION_*` value.
+    pub const fn index(self) -> u32 {
+        match self {
+            SelectionMode::Nearest => 0,
+            SelectionMode::Idw4 => 1,
+            SelectionMode::Continuous => 2,
+        }
+    }
+
+    /// The mode with index `i`, if any.
+    pub fn from_index(i: u32) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.index() == i)
+    }
+
+    /// The mode's name on the command line and in reports: `nearest`, `idw4`, `continuous`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            SelectionMode::Nearest => "nearest",
+            SelectionMode::Idw4 => "idw4",
+            SelectionMode::Continuous => "continuous",
+        }
+    }
+
+    /// The mode named `name` (as [`SelectionMode::name`] spells it), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
 /// Options of [`Selection::build`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SelectionOptions {
@@ -662,6 +698,17 @@ fn unit(u: DVec3) -> Option<DVec3> {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
+
+    #[test]
+    fn each_mode_has_one_index_and_one_name() {
+        for (i, m) in SelectionMode::ALL.into_iter().enumerate() {
+            assert_eq!(m.index() as usize, i, "ALL is in index order");
+            assert_eq!(SelectionMode::from_index(m.index()), Some(m));
+            assert_eq!(SelectionMode::from_name(m.name()), Some(m));
+        }
+        assert_eq!(SelectionMode::from_index(3), None);
+        assert_eq!(SelectionMode::from_name("Nearest"), None, "names are exact");
+    }
     use crate::nearfield::layout::{cameras, Layout};
     use crate::nearfield::rayset::{CaptureSphere, Intrinsics};
     use glam::DVec2;

@@ -132,12 +132,10 @@ fn parse_exposure(s: &str) -> Result<Option<f32>, String> {
 }
 
 fn parse_mode(s: &str) -> Result<SelectionMode, String> {
-    match s {
-        "nearest" => Ok(SelectionMode::Nearest),
-        "idw4" => Ok(SelectionMode::Idw4),
-        "continuous" => Ok(SelectionMode::Continuous),
-        _ => Err(format!("--mode '{s}': expected nearest, idw4 or continuous")),
-    }
+    SelectionMode::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = SelectionMode::ALL.iter().map(|m| m.name()).collect();
+        format!("--mode '{s}': expected one of {}", names.join(", "))
+    })
 }
 
 /// What was loaded: the luminance the PNG's default exposure is based on, and a description.
