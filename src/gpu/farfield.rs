@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use glam::{Mat4, Vec4};
+use glam::Mat4;
 
 use super::camera::HostCamera;
 use super::context::GpuContext;
@@ -154,8 +154,7 @@ pub struct InstanceUniform {
     pub line_color: [f32; 4],
 }
 
-/// Size of one uniform slot (dynamic offsets must be 256-byte aligned).
-
+/// What a far-field pipeline is specialised for (one pipeline per key, cached).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
     color: ColorFormat,
@@ -564,11 +563,3 @@ pub fn tone_map(l: f64, exposure: f64) -> f64 {
     x / (1.0 + x)
 }
 
-/// The eye-space vector `Vec4` helper for tests: the direction from a luminaire-frame point to the eye.
-pub fn view_direction(eye_local: Vec4, p: glam::Vec3) -> glam::Vec3 {
-    if eye_local.w > 0.5 {
-        (eye_local.truncate() - p).normalize_or_zero()
-    } else {
-        eye_local.truncate().normalize_or_zero()
-    }
-}

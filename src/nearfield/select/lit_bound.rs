@@ -31,7 +31,6 @@ use super::{Selection, SelectionMode};
 use crate::nearfield::pack::{Pack, EMPTY_TILE};
 use crate::nearfield::{NearfieldError, RayImageSet};
 
-/// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
 /// How far (camera pixels) a kept tile can light a sample outside it: the bilinear footprint reaches
 /// half a pixel beyond a texel centre; 0.1 more for rounding.
 pub const FOOTPRINT_PX: f64 = 0.6;
@@ -40,6 +39,7 @@ pub const FOOTPRINT_PX: f64 = 0.6;
 /// the rasteriser covers a pixel by its centre, so only rounding needs room.
 pub const GROW_PX: f32 = 0.25;
 
+/// Per camera: the corner directions of D_j, and the cap radii ρ_j (rad) for the three modes.
 #[derive(Debug, Clone)]
 struct CameraCone {
     /// Unit directions (luminaire frame) of the corners of the convex hull of the camera's lit
