@@ -562,4 +562,3 @@ pub fn tone_map(l: f64, exposure: f64) -> f64 {
     let x = (l * exposure).max(0.0);
     x / (1.0 + x)
 }
-
