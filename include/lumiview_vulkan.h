@@ -215,7 +215,7 @@ static inline void lumi_vk_release_import(VkDevice device, VkImage *image, VkDev
 }
 
 /* One queue-family ownership transfer of an imported image (the acquire and the release below). */
-static inline void lumi_vk__transfer(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t src_family,
+static inline void lumi_vk_transfer_(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t src_family,
                                      uint32_t dst_family, VkImageLayout old_layout, VkImageLayout new_layout,
                                      VkPipelineStageFlags src_stage, VkAccessFlags src_access,
                                      VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
@@ -245,7 +245,7 @@ static inline void lumi_vk__transfer(VkCommandBuffer cmd, const lumi_export *e, 
 static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t queue_family,
                                        VkImageLayout new_layout, VkPipelineStageFlags dst_stage,
                                        VkAccessFlags dst_access) {
-    lumi_vk__transfer(cmd, e, image, VK_QUEUE_FAMILY_EXTERNAL, queue_family, (VkImageLayout)e->vk_layout, new_layout,
+    lumi_vk_transfer_(cmd, e, image, VK_QUEUE_FAMILY_EXTERNAL, queue_family, (VkImageLayout)e->vk_layout, new_layout,
                       dst_stage, 0, dst_stage, dst_access);
 }
 
@@ -257,7 +257,7 @@ static inline void lumi_vk_cmd_acquire(VkCommandBuffer cmd, const lumi_export *e
 static inline void lumi_vk_cmd_release(VkCommandBuffer cmd, const lumi_export *e, VkImage image, uint32_t queue_family,
                                        VkImageLayout old_layout, VkPipelineStageFlags src_stage,
                                        VkAccessFlags src_access) {
-    lumi_vk__transfer(cmd, e, image, queue_family, VK_QUEUE_FAMILY_EXTERNAL, old_layout, (VkImageLayout)e->vk_layout,
+    lumi_vk_transfer_(cmd, e, image, queue_family, VK_QUEUE_FAMILY_EXTERNAL, old_layout, (VkImageLayout)e->vk_layout,
                       src_stage, src_access, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, 0);
 }
 

@@ -59,17 +59,16 @@ struct Lum {
 @group(0) @binding(0) var<storage, read> draw: Draw;
 
 @group(1) @binding(0) var<storage, read> lum: Lum;
-// Per camera 6 × vec4<u32>: position.xyz (f32 bits), width | right.xyz, height | down.xyz, fx |
-// forward.xyz, fy | cx, cy (f32 bits), table offset, unused | bbox x0, y0, w, h (tiles).
+// The camera records, CAMERA_RECORD_VEC4S × vec4<u32> each: see camera() below.
 @group(1) @binding(1) var<storage, read> cameras: array<vec4<u32>>;
-// 3 × vec4 per triangle: (b×c, camera a), (c×a, camera b), (a×b, camera c); camera bits 0xFFFFFFFF = hole.
+// 3 × vec4 per triangle: (b×c, camera a), (c×a, camera b), (a×b, camera c); camera bits EMPTY = hole.
 // Followed by the proxy's BVH (see Lum.bvh).
 @group(1) @binding(2) var<storage, read> tris: array<vec4<f32>>;
 // Per vertex: unit direction, camera bits.
 @group(1) @binding(3) var<storage, read> verts: array<vec4<f32>>;
 // The three CSR cell tables, concatenated (offsets at lum.lists_*).
 @group(1) @binding(4) var<storage, read> lists: array<u32>;
-// Pack chunk -> GPU chunk (0xFFFFFFFF: not resident): table chunks first, then slot chunks.
+// Pack chunk -> GPU chunk (EMPTY: not resident): table chunks first, then slot chunks.
 @group(1) @binding(5) var<storage, read> chunk_map: array<u32>;
 @group(1) @binding(6) var<storage, read_write> misses: array<atomic<u32>>;
 @group(1) @binding(7) var<storage, read> pool0: array<u32>;
@@ -165,7 +164,7 @@ struct Cam {
     bbox: vec4<u32>,
 };
 
-// Per camera CAMERA_RECORD_VEC4S (6) × vec4<u32> (written by `NearfieldLuminaire::upload`): the
+// Per camera CAMERA_RECORD_VEC4S (6) × vec4<u32> (written by `NearfieldPass::upload`): the
 // three projection rows (f32 bits) | tile box x0, y0, w, h (tiles) | width, height, table offset,
 // unused | position xyz (f32 bits; the visibility test), unused.
 fn camera(i: u32) -> Cam {
@@ -667,16 +666,16 @@ fn shade(in: VsOut) -> Shaded {
         if (sel.cam.x == EMPTY) {
             return out;
         }
-    } else if (SELECTION == 2u) {
+    } else if (SELECTION == SELECTION_CONTINUOUS) {
         sel = select_continuous(u, cell_of(u));
     } else {
-        sel = select_nearest(u, cell_of(u), SELECTION == 1u);
+        sel = select_nearest(u, cell_of(u), SELECTION == SELECTION_IDW4);
         if (CELLS && sel.cam.x != in.tri) {
             return out;
         }
     }
     // Cameras the mode can select: 1 (nearest), 4 (idw4), 3 (continuous).
-    let n_cams = select(select(3u, 4u, SELECTION == 1u), 1u, SELECTION == 0u);
+    let n_cams = select(select(3u, 4u, SELECTION == SELECTION_IDW4), 1u, SELECTION == SELECTION_NEAREST);
     // The point on the line closest to the content centre (bounding mode samples along v only).
     let pc = p - bc * v;
     // Proxy mode: a camera whose straight path to P is blocked by the proxy sees something else there
@@ -751,14 +750,14 @@ fn shade(in: VsOut) -> Shaded {
     }
     // A surface proxy: a camera that sampled no light where another sees it does not vote. A
     // bounding proxy (lum.gap.z = 1, a ray file's hull): darkness is the estimate's own, it votes.
-    if (PROXY && SELECTION == 2u && w_lit > 0.0 && lum.gap.z < 0.5) {
+    if (PROXY && SELECTION == SELECTION_CONTINUOUS && w_lit > 0.0 && lum.gap.z < 0.5) {
         l = l_lit;
         wsum = w_lit;
         all_lit = true;
     }
     if (wsum > 0.0) {
         l = l / wsum;
-        if (SELECTION == 2u && all_lit && l > 0.0) {
+        if (SELECTION == SELECTION_CONTINUOUS && all_lit && l > 0.0) {
             // ln 8 … ln 64.
             let t = max(smoothstep(2.0794415, 4.1588831, log(l_max / l_min)), smoothstep(0.2, 0.5, spread));
             var mean_log = log_l / wsum;

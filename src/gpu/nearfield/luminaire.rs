@@ -222,13 +222,11 @@ impl NearfieldLuminaire {
         if uploads.is_empty() {
             return Ok(());
         }
-        self.upload(ctx, uploads, &r.map)
+        self.write_chunks(ctx, uploads, &r.map)
     }
-}
 
-impl NearfieldLuminaire {
     /// Writes the uploaded chunks into their pool pages and the new chunk map.
-    fn upload(&self, ctx: &GpuContext, uploads: Uploads, map: &[u32]) -> Result<(), GpuError> {
+    fn write_chunks(&self, ctx: &GpuContext, uploads: Uploads, map: &[u32]) -> Result<(), GpuError> {
         for (g, c) in uploads {
             let bytes = self.chunks.chunk_bytes(&self.pack, c)?;
             let page = (g / self.chunks_per_page) as usize;
@@ -257,6 +255,6 @@ impl NearfieldLuminaire {
         let uploads = r
             .make_resident(&needed)
             .map_err(|m| GpuError::invalid("budget_bytes", m))?;
-        self.upload(ctx, uploads, &r.map)
+        self.write_chunks(ctx, uploads, &r.map)
     }
 }

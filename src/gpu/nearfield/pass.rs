@@ -86,14 +86,14 @@ pub(crate) fn pipeline_constant_names() -> Vec<&'static str> {
 /// Pipelines and layouts of the near-field pass.
 #[derive(Debug)]
 pub struct NearfieldPass {
-    pub(super) module: wgpu::ShaderModule,
-    pub(super) draw_layout: wgpu::BindGroupLayout,
+    module: wgpu::ShaderModule,
+    draw_layout: wgpu::BindGroupLayout,
     pub(super) lum_layout: wgpu::BindGroupLayout,
-    pub(super) pipeline_layout: wgpu::PipelineLayout,
+    pipeline_layout: wgpu::PipelineLayout,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
-    pub(super) uniforms: DrawSlots,
+    uniforms: DrawSlots,
     /// This frame's bounding polygons (luminaire frames, m), with the buffer's capacity in vertices.
-    pub(super) polygons: Option<(wgpu::Buffer, u64)>,
+    polygons: Option<(wgpu::Buffer, u64)>,
 }
 
 /// What a draw rasterises.

@@ -40,7 +40,7 @@ pub(super) struct PoolLayout {
     pub(super) slots_per_chunk: u32,
 }
 
-pub(super) const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
+const POLYGON_ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Uint32];
 
 /// [`PolygonVertex`]: position and selection triangle.
 pub(super) const POLYGON_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {

@@ -48,7 +48,7 @@ struct CameraCone {
     /// Unit direction of the camera's selection vertex from the capture centre.
     vertex: DVec3,
     /// ρ for nearest, idw4, continuous.
-    rho: [f64; 3],
+    rho: [f64; SelectionMode::ALL.len()],
     /// The corners of the camera's Voronoi cell (unit directions: the circumcentres of the triangles
     /// around its vertex); `None` where a triangle around it is a hole or folded (its region then
     /// reaches out to the max gap: the cap of radius ρ stands in).
@@ -61,7 +61,7 @@ pub struct LitDirections {
     cameras: Vec<Option<CameraCone>>,
     /// Per selection vertex: its camera's ρ for nearest, idw4, continuous (rad), lit or not, with its
     /// cosine and sine.
-    vertex_rho: Vec<[(f64, f64, f64); 3]>,
+    vertex_rho: Vec<[(f64, f64, f64); SelectionMode::ALL.len()]>,
     /// Capture centre (m) and radius (m).
     sphere: (DVec3, f64),
 }

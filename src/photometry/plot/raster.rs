@@ -1,7 +1,7 @@
 //! The PNG rasteriser of the diagrams: tiny-skia (anti-aliased) for the shapes, ab_glyph
 //! coverage blended source-over for the text, onto an opaque white pixmap.
 
-use ab_glyph::{point, Font};
+use crate::draw::text::Anchor;
 use tiny_skia::{
     Color, FillRule, IntSize, LineCap, LineJoin, Paint, PathBuilder, Pixmap, PixmapPaint, Rect, Stroke, StrokeDash,
     Transform,
@@ -117,38 +117,13 @@ fn draw(pm: &mut Pixmap, face: &Typeface, shape: &Shape) {
     }
 }
 
-/// Rasterises a line of text with ab_glyph and blends its coverage source-over.
+/// Rasterises a line of text (`draw::text`: ab_glyph coverage blended source-over; premultiplied
+/// RGBA, channels stay ≤ alpha because both blends are the same monotone mix).
 fn draw_text(pm: &mut Pixmap, face: &Typeface, t: &TextItem) {
-    let (glyphs, width) = face.layout(&t.text, t.size);
-    let x0 = match t.anchor {
-        TextAnchor::Start => t.pos[0],
-        TextAnchor::Middle => t.pos[0] - width / 2.0,
-        TextAnchor::End => t.pos[0] - width,
+    let anchor = match t.anchor {
+        TextAnchor::Start => Anchor::Start,
+        TextAnchor::Middle => Anchor::Middle,
+        TextAnchor::End => Anchor::End,
     };
-    let (w, h) = (i64::from(pm.width()), i64::from(pm.height()));
-    let alpha = f32::from(t.colour.0[3]) / 255.0;
-    let data = pm.data_mut();
-    for mut g in glyphs {
-        g.position = point(g.position.x + x0 as f32, t.pos[1] as f32);
-        let Some(outline) = face.font.outline_glyph(g) else {
-            continue;
-        };
-        let bounds = outline.px_bounds();
-        let (bx, by) = (bounds.min.x as i64, bounds.min.y as i64);
-        outline.draw(|gx, gy, coverage| {
-            let (x, y) = (bx + i64::from(gx), by + i64::from(gy));
-            let a = coverage.clamp(0.0, 1.0) * alpha;
-            if x < 0 || y < 0 || x >= w || y >= h || a <= 0.0 {
-                return;
-            }
-            // Premultiplied RGBA, source-over; channels stay ≤ alpha because both blends are the
-            // same monotone mix.
-            let i = ((y * w + x) * 4) as usize;
-            for k in 0..3 {
-                let src = f32::from(t.colour.0[k]) * a;
-                data[i + k] = (src + f32::from(data[i + k]) * (1.0 - a)).round().min(255.0) as u8;
-            }
-            data[i + 3] = (255.0 * a + f32::from(data[i + 3]) * (1.0 - a)).round().min(255.0) as u8;
-        });
-    }
+    face.text(pm, &t.text, t.pos[0], t.pos[1], t.size, t.colour.0, anchor);
 }

@@ -134,7 +134,8 @@ fn parse_exposure(s: &str) -> Result<Option<f32>, String> {
 fn parse_mode(s: &str) -> Result<SelectionMode, String> {
     SelectionMode::from_name(s).ok_or_else(|| {
         let names: Vec<&str> = SelectionMode::ALL.iter().map(|m| m.name()).collect();
-        format!("--mode '{s}': expected one of {}", names.join(", "))
+        let (last, rest) = names.split_last().unwrap_or((&"", &[]));
+        format!("--mode '{s}': expected {} or {last}", rest.join(", "))
     })
 }
 
