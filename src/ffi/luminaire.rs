@@ -11,7 +11,7 @@ use super::handle;
 use super::{lumi_status, mat_arg, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
 use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings, DEFAULT_BUDGET_BYTES};
 use crate::gpu::renderer::Luminaire;
-use crate::gpu::{GpuError, InstanceId, LuminaireId};
+use crate::gpu::{GpuError, InstanceId, LogLevel, LuminaireId};
 use crate::nearfield::scanfile;
 use crate::nearfield::select::SelectionMode;
 use crate::photometry::lut::{Lut, LutEncoding, LutTexels};
@@ -355,10 +355,21 @@ fn load_any(c: &mut ContextInner, path: &Path, d: &ScanDesc) -> Result<Luminaire
                 ),
             ));
         }
-        return Ok(c.renderer.load_luminaire(path, &LoadOptions::default())?);
+        let p = crate::photometry::load(path, &LoadOptions::default()).map_err(GpuError::from)?;
+        // Warnings (each names the file) go to the host's log callback.
+        for w in &p.warnings {
+            c.renderer.ctx.log(LogLevel::Warning, w);
+        }
+        return Ok(c.renderer.add_photometry(Arc::new(p))?);
     };
-    let (pack, _cached) =
-        scanfile::open_scan_of_kind(path, kind, d.cache_dir.as_deref()).map_err(|e| in_file(path, e.into()))?;
+    let mut warnings = Vec::new();
+    let (pack, _cached) = scanfile::open_scan_of_kind_with_warnings(path, kind, d.cache_dir.as_deref(), &mut warnings)
+        .map_err(|e| in_file(path, e.into()))?;
+    for w in &warnings {
+        c.renderer
+            .ctx
+            .log(LogLevel::Warning, &format!("{}: {w}", path.display()));
+    }
     // The caller's mesh wins; else the pack's own (a ray file's grown hull bounds the light).
     let (proxy, bound) = match &d.proxy {
         Some(p) => (Some(crate::nearfield::proxy::load_gltf(p)?), false),
