@@ -20,3 +20,4 @@ pub mod gpu;
 pub mod interop;
 pub mod nearfield;
 pub mod photometry;
+pub mod source;

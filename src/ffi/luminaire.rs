@@ -11,11 +11,11 @@ use super::handle;
 use super::{lumi_status, mat_arg, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
 use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings, DEFAULT_BUDGET_BYTES};
 use crate::gpu::renderer::Luminaire;
-use crate::gpu::{GpuError, InstanceId, LogLevel, LuminaireId};
-use crate::nearfield::scanfile;
+use crate::gpu::{Arg, GpuError, InstanceId, LogLevel, LuminaireId};
 use crate::nearfield::select::SelectionMode;
 use crate::photometry::lut::{Lut, LutEncoding, LutTexels};
-use crate::photometry::{LoadOptions, OpeningShape, Photometry};
+use crate::photometry::{OpeningShape, Photometry};
+use crate::source::{self, Source, SourceError, SourceOptions};
 
 /// Handle of a luminaire, owned by its context (0 is never a valid handle).
 pub type lumi_luminaire = u64;
@@ -320,12 +320,12 @@ fn in_file(path: &Path, e: FfiError) -> FfiError {
 /// A near-field upload error, with the descriptor's field names.
 fn upload_error(e: GpuError) -> FfiError {
     match e {
-        GpuError::InvalidArgument { name, message } => {
-            let field = match name.as_str() {
-                "budget_bytes" => "desc.budget_bytes",
-                "content_radius_m" => "desc.content_radius_m",
-                "proxy" => "desc.proxy_path",
-                other => other,
+        GpuError::InvalidArgument { arg, message } => {
+            let field = match arg {
+                Arg::BudgetBytes => "desc.budget_bytes",
+                Arg::ContentRadius => "desc.content_radius_m",
+                Arg::Proxy => "desc.proxy_path",
+                other => other.name(),
             };
             FfiError::invalid(field, message)
         }
@@ -335,8 +335,8 @@ fn upload_error(e: GpuError) -> FfiError {
 
 /// Loads any luminaire file: a scan (detected by its first bytes) or photometry.
 fn load_any(c: &mut ContextInner, path: &Path, d: &ScanDesc) -> Result<LuminaireId, FfiError> {
-    let kind = scanfile::detect(path)?;
-    let Some(kind) = kind else {
+    let kind = source::detect(path)?;
+    if !kind.is_scan() {
         if d.proxy.is_some() {
             return Err(FfiError::invalid(
                 "desc.proxy_path",
@@ -355,16 +355,25 @@ fn load_any(c: &mut ContextInner, path: &Path, d: &ScanDesc) -> Result<Luminaire
                 ),
             ));
         }
-        let p = crate::photometry::load(path, &LoadOptions::default()).map_err(GpuError::from)?;
-        // Warnings (each names the file) go to the host's log callback.
-        for w in &p.warnings {
-            c.renderer.ctx.log(LogLevel::Warning, w);
-        }
-        return Ok(c.renderer.add_photometry(Arc::new(p))?);
+    }
+    let opts = SourceOptions {
+        cache_dir: d.cache_dir.clone(),
+        ..SourceOptions::default()
     };
     let mut warnings = Vec::new();
-    let (pack, _cached) = scanfile::open_scan_of_kind_with_warnings(path, kind, d.cache_dir.as_deref(), &mut warnings)
-        .map_err(|e| in_file(path, e.into()))?;
+    let opened = source::open(path, kind, &opts, &mut warnings);
+    let pack = match opened {
+        Ok(Source::Photometry(p)) => {
+            // Warnings (each names the file) go to the host's log callback.
+            for w in &p.warnings {
+                c.renderer.ctx.log(LogLevel::Warning, w);
+            }
+            return Ok(c.renderer.add_photometry(Arc::new(p))?);
+        }
+        Ok(Source::Scan { pack, .. }) => pack,
+        Err(SourceError::Photometry(e)) => return Err(GpuError::from(e).into()),
+        Err(SourceError::Nearfield(e)) => return Err(in_file(path, e.into())),
+    };
     for w in &warnings {
         c.renderer
             .ctx
@@ -783,10 +792,7 @@ pub unsafe extern "C" fn lumi_instance_create(
             }
             luminaire_of(c, luminaire)?;
             let lum = luminaire_id(c, luminaire, "luminaire")?;
-            let id = c.renderer.add_instance(lum, m).map_err(|e| match e {
-                crate::gpu::GpuError::InvalidArgument { name, message } => FfiError::invalid(&name, message),
-                other => other.into(),
-            })?;
+            let id = c.renderer.add_instance(lum, m)?;
             write_out(out, handle::encode(c.tag, handle::Kind::Instance, id.0));
             Ok(())
         })

@@ -1,9 +1,9 @@
 //! Rendering a frame: the host's camera and render options.
 
 use super::context::{lumi_context, with_context, ContextInner};
-use super::target::target_mut;
+use super::target::target_in;
 use super::{lumi_status, FfiError};
-use crate::gpu::{DepthRange, HostCamera, Origin, OutputMode, Overlays, RenderOptions};
+use crate::gpu::{Arg, DepthRange, GpuError, HostCamera, Origin, OutputMode, Overlays, RenderOptions};
 
 /// Clip depth range: OpenGL's −1…1.
 pub const LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE: u32 = 0;
@@ -85,17 +85,11 @@ pub extern "C" fn lumi_render_options_default() -> lumi_render_options {
     }
 }
 
+/// The host's camera: its enums checked here, its matrices once, by the frame (`gpu::FrameView`).
 fn camera(c: &lumi_camera) -> Result<HostCamera, FfiError> {
-    let m = |a: &[f32; 16], name: &str| {
-        if a.iter().any(|v| !v.is_finite()) {
-            Err(FfiError::invalid(name, "matrix has a NaN or infinite element"))
-        } else {
-            Ok(glam::Mat4::from_cols_array(a))
-        }
-    };
     Ok(HostCamera {
-        view: m(&c.view, "camera.view")?,
-        projection: m(&c.projection, "camera.projection")?,
+        view: glam::Mat4::from_cols_array(&c.view),
+        projection: glam::Mat4::from_cols_array(&c.projection),
         depth_range: match c.depth_range {
             LUMI_DEPTH_RANGE_NEG_ONE_TO_ONE => DepthRange::NegOneToOne,
             LUMI_DEPTH_RANGE_ZERO_TO_ONE => DepthRange::ZeroToOne,
@@ -108,6 +102,24 @@ fn camera(c: &lumi_camera) -> Result<HostCamera, FfiError> {
             v => return Err(FfiError::invalid("camera.origin", format!("unknown value {v}"))),
         },
     })
+}
+
+/// A render error, naming the camera's and the options' fields as the C API spells them.
+fn render_error(e: GpuError) -> FfiError {
+    match e {
+        GpuError::InvalidArgument { arg, message } => {
+            let field = match arg {
+                Arg::View => "camera.view",
+                Arg::Projection => "camera.projection",
+                Arg::Exposure => "options.exposure",
+                Arg::SolidRadius => "options.solid_radius_m",
+                Arg::Output => "options.output",
+                other => other.name(),
+            };
+            FfiError::invalid(field, message)
+        }
+        other => other.into(),
+    }
 }
 
 fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
@@ -169,13 +181,11 @@ pub unsafe extern "C" fn lumi_render(
                 Some(o) => self::options(o)?,
                 None => self::options(&lumi_render_options_default())?,
             };
-            target_mut(c, target)?;
-            let ContextInner { renderer, targets, .. } = c;
-            let t = targets
-                .get_mut(&target)
-                .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {target:#x}")))?;
-            renderer.render(t, &cam, &o)?;
-            Ok(())
+            let ContextInner {
+                renderer, targets, tag, ..
+            } = c;
+            let t = target_in(*tag, targets, target)?;
+            renderer.render(t, &cam, &o).map_err(render_error)
         })
     }
 }

@@ -1,5 +1,6 @@
 //! Render targets: create, destroy, export as opaque fds, read back.
 
+use std::collections::BTreeMap;
 use std::os::fd::IntoRawFd;
 
 use super::context::{lumi_context, with_context, ContextInner};
@@ -135,16 +136,32 @@ pub(crate) fn attachment(v: u32) -> Result<Attachment, FfiError> {
     }
 }
 
-pub(crate) fn target_mut(c: &mut ContextInner, t: lumi_target) -> Result<&mut RenderTarget, FfiError> {
-    check_target(c, t)?;
-    c.targets
-        .get_mut(&t)
-        .ok_or_else(|| FfiError::invalid("target", format!("no target with handle {t:#x} (destroyed?)")))
+/// The target `t` of a context, given as its tag and target map so that the caller may borrow the
+/// renderer beside it; the handle is checked and looked up once.
+pub(crate) fn target_in(
+    tag: u64,
+    targets: &mut BTreeMap<u64, RenderTarget>,
+    t: lumi_target,
+) -> Result<&mut RenderTarget, FfiError> {
+    check_target(tag, t)?;
+    targets.get_mut(&t).ok_or_else(|| gone(t))
 }
 
-/// Checks that `t` is a target handle of this context (the map is keyed by the whole handle).
-pub(crate) fn check_target(c: &ContextInner, t: lumi_target) -> Result<(), FfiError> {
-    super::handle::decode(c.tag, super::handle::Kind::Target, t, "target").map(|_| ())
+/// The target `t` of a context, read-only ([`target_in`]).
+fn target_ref(c: &ContextInner, t: lumi_target) -> Result<&RenderTarget, FfiError> {
+    check_target(c.tag, t)?;
+    c.targets.get(&t).ok_or_else(|| gone(t))
+}
+
+/// Checks that `t` is a target handle of the context tagged `tag` (the map is keyed by the whole
+/// handle).
+fn check_target(tag: u64, t: lumi_target) -> Result<(), FfiError> {
+    super::handle::decode(tag, super::handle::Kind::Target, t, "target").map(|_| ())
+}
+
+/// A target handle of this context that names no live target.
+fn gone(t: lumi_target) -> FfiError {
+    FfiError::invalid("target", format!("no target with handle {t:#x} (destroyed?)"))
 }
 
 /// Creates a render target. `out` is written only on success.
@@ -204,13 +221,7 @@ pub unsafe extern "C" fn lumi_target_destroy(ctx: *mut lumi_context, target: lum
             if target == 0 {
                 return Ok(());
             }
-            check_target(c, target)?;
-            if !c.targets.contains_key(&target) {
-                return Err(FfiError::invalid(
-                    "target",
-                    format!("no target with handle {target:#x} (destroyed?)"),
-                ));
-            }
+            target_ref(c, target)?;
             // The target goes whatever the wait reports (an earlier call's GPU error, a lost
             // device): the handle is stale afterwards either way, and the error is returned.
             let waited = c.renderer.ctx.wait_idle();
@@ -247,10 +258,7 @@ pub unsafe extern "C" fn lumi_target_export(
             }
             let which = attachment(which)?;
             let caps = c.renderer.ctx.caps.clone();
-            check_target(c, target)?;
-            let t = c.targets.get(&target).ok_or_else(|| {
-                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
-            })?;
+            let t = target_ref(c, target)?;
             let gl_internal_format = match which {
                 Attachment::Color => t.desc.color.gl_internal_format(),
                 Attachment::Depth => t.desc.depth.gl_internal_format(),
@@ -311,11 +319,10 @@ pub unsafe extern "C" fn lumi_target_read_pixels(
                 return Err(FfiError::null("written"));
             }
             let which = attachment(which)?;
-            check_target(c, target)?;
-            let ContextInner { renderer, targets, .. } = c;
-            let t = targets.get_mut(&target).ok_or_else(|| {
-                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
-            })?;
+            let ContextInner {
+                renderer, targets, tag, ..
+            } = c;
+            let t = target_in(*tag, targets, target)?;
             let need = t.desc.width as usize * t.desc.height as usize * t.bytes_per_pixel(which) as usize;
             if which == Attachment::Depth && t.desc.depth == DepthFormat::None {
                 return Err(FfiError::invalid("which", "the target has no depth output"));
@@ -366,10 +373,7 @@ pub unsafe extern "C" fn lumi_target_export_semaphores(
             if host_done_fd.is_null() {
                 return Err(FfiError::null("host_done_fd"));
             }
-            check_target(c, target)?;
-            let t = c.targets.get(&target).ok_or_else(|| {
-                FfiError::invalid("target", format!("no target with handle {target:#x} (destroyed?)"))
-            })?;
+            let t = target_ref(c, target)?;
             let (a, b) = t.export_semaphores()?;
             write_out(render_done_fd, a.into_raw_fd());
             write_out(host_done_fd, b.into_raw_fd());

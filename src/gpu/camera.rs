@@ -11,7 +11,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use super::GpuError;
+use super::{Arg, GpuError};
 
 /// The host's clip-space depth range.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -49,7 +49,7 @@ pub struct HostCamera {
 impl HostCamera {
     /// Checks the matrices (finite, invertible).
     pub fn validate(&self) -> Result<(), GpuError> {
-        for (name, m) in [("view", self.view), ("projection", self.projection)] {
+        for (name, m) in [(Arg::View, self.view), (Arg::Projection, self.projection)] {
             if !m.is_finite() {
                 return Err(GpuError::invalid(name, "matrix has a NaN or infinite element"));
             }

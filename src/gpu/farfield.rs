@@ -7,10 +7,10 @@ use std::sync::Arc;
 
 use glam::Mat4;
 
-use super::camera::HostCamera;
 use super::context::GpuContext;
+use super::frame::{FrameView, Pass};
 use super::slots::{DrawSlots, SLOT};
-use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, RenderTarget, POSITION_LAYOUT};
+use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, POSITION_LAYOUT};
 use super::GpuError;
 use crate::photometry::meshes;
 use crate::photometry::Photometry;
@@ -44,74 +44,6 @@ pub fn luminance_table(p: &Photometry) -> Vec<f32> {
         }
     }
     out
-}
-
-/// Overlays drawn on top of the appearance.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct Overlays {
-    /// The photometric-solid wireframe.
-    pub solid: bool,
-    /// The housing box (where the file gives luminaire dimensions).
-    pub housing: bool,
-}
-
-/// What the colour output holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum OutputMode {
-    /// Linear luminance in cd/m² (float targets only).
-    Luminance,
-    /// Reinhard with exposure: x = L · exposure, display value x / (1 + x).
-    ToneMapped,
-}
-
-/// Per-frame render options.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RenderOptions {
-    /// Output mode (RGBA8 sRGB targets require `ToneMapped`).
-    pub output: OutputMode,
-    /// Exposure in m²/cd for tone mapping (x = L · exposure); also scales overlay colours in
-    /// luminance mode (an overlay of display value v is written as v / exposure cd/m²).
-    pub exposure: f32,
-    /// Overlays.
-    pub overlays: Overlays,
-    /// Radius of the photometric solid at the maximum intensity, metres.
-    pub solid_radius_m: f32,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        RenderOptions {
-            output: OutputMode::Luminance,
-            exposure: 1e-3,
-            overlays: Overlays::default(),
-            solid_radius_m: 0.5,
-        }
-    }
-}
-
-impl RenderOptions {
-    /// Checks the options against a target.
-    pub fn validate(&self, target: &RenderTarget) -> Result<(), GpuError> {
-        if !self.exposure.is_finite() || self.exposure <= 0.0 {
-            return Err(GpuError::invalid(
-                "exposure",
-                format!("{} must be finite and > 0", self.exposure),
-            ));
-        }
-        if !self.solid_radius_m.is_finite() || self.solid_radius_m <= 0.0 {
-            return Err(GpuError::invalid(
-                "solid_radius_m",
-                format!("{} must be finite and > 0", self.solid_radius_m),
-            ));
-        }
-        if self.output == OutputMode::Luminance && target.desc.color == ColorFormat::Rgba8Srgb {
-            return Err(GpuError::invalid(
-                "output",
-                "an RGBA8 sRGB target cannot hold luminance in cd/m²: use the tone-mapped output or a float target",
-            ));
-        }
-        Ok(())
-    }
 }
 
 /// A luminaire's far-field data on the GPU; instances share it through an `Arc`.
@@ -331,38 +263,30 @@ impl FarfieldPass {
         self.pipelines.insert(key, p.clone());
         Ok(p)
     }
+}
 
-    /// Prepares a frame: checks the options and instances, writes the draw uniforms and picks the
-    /// pipelines for the target's formats. The draws happen in [`FarfieldPass::draw`] inside the
-    /// frame's render pass.
-    pub fn prepare(
+impl Pass for FarfieldPass {
+    /// A luminaire and its model matrix (luminaire frame → world, validated by the renderer).
+    type Instance = (Arc<FarfieldLuminaire>, Mat4);
+    type Prepared = FarfieldFrame;
+
+    /// Prepares a frame: writes the draw uniforms and picks the pipelines for the target's formats.
+    /// The draws happen in [`Pass::record`] inside the frame's render pass.
+    fn prepare(
         &mut self,
         ctx: &GpuContext,
-        target: &RenderTarget,
-        camera: &HostCamera,
-        options: &RenderOptions,
-        instances: &[(&FarfieldLuminaire, Mat4)],
+        view: &FrameView,
+        instances: &[Self::Instance],
     ) -> Result<FarfieldFrame, GpuError> {
-        for (_, m) in instances {
-            if !m.is_finite() || m.determinant().abs() < 1e-30 {
-                return Err(GpuError::invalid(
-                    "model matrix",
-                    "an instance's model matrix is not finite or is singular",
-                ));
-            }
-        }
-        let mode = if options.output == OutputMode::ToneMapped {
-            1.0
-        } else {
-            0.0
-        };
+        let options = view.options();
+        let mode = view.output_flag();
         let line_scale = 1.0 / options.exposure;
-        let clip_from_world = camera.clip_from_world();
+        let clip_from_world = view.clip_from_world();
         // Up to three draws per instance: opening, solid, housing.
         let mut slots: Vec<InstanceUniform> = Vec::with_capacity(instances.len() * 3);
         let mut draws: Vec<FarfieldDraw> = Vec::new();
         for (lum, model) in instances {
-            let eye = camera.eye_in(*model);
+            let eye = view.camera().eye_in(*model);
             let base = InstanceUniform {
                 clip_from_local: (clip_from_world * *model).to_cols_array_2d(),
                 eye_local: eye.to_array(),
@@ -396,9 +320,9 @@ impl FarfieldPass {
             return Ok(FarfieldFrame::default());
         }
         let key = |lines| PipelineKey {
-            color: target.desc.color,
-            depth_copy: target.desc.depth == DepthFormat::R32Float,
-            reversed_z: camera.reversed_z,
+            color: view.target().color,
+            depth_copy: view.target().depth == DepthFormat::R32Float,
+            reversed_z: view.camera().reversed_z,
             lines,
         };
         let tri_pipeline = self.pipeline(ctx, key(false))?;
@@ -410,8 +334,7 @@ impl FarfieldPass {
         })
     }
 
-    /// Records a prepared frame's draws into the frame's render pass.
-    pub fn draw(&self, frame: &FarfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
+    fn record(&self, frame: &FarfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
         let Some((tri, line, ubind)) = &frame.pipelines else {
             return;
         };
@@ -433,107 +356,6 @@ type FarfieldDraw = (usize, wgpu::BindGroup, wgpu::Buffer, u32, bool);
 pub struct FarfieldFrame {
     draws: Vec<FarfieldDraw>,
     pipelines: Option<(wgpu::RenderPipeline, wgpu::RenderPipeline, wgpu::BindGroup)>,
-}
-
-/// Records one frame into `target`: acquires the exported images, clears colour (transparent),
-/// depth copy and depth (far), records `draw` into the render pass, releases the images to the host,
-/// submits, and waits for the GPU (or signals the target's semaphores).
-pub fn render_frame(
-    ctx: &GpuContext,
-    target: &mut RenderTarget,
-    camera: &HostCamera,
-    draw: impl FnOnce(&mut wgpu::RenderPass<'_>),
-) -> Result<(), GpuError> {
-    let far = if camera.reversed_z { 0.0 } else { 1.0 };
-    let color_view = target
-        .color
-        .texture()
-        .create_view(&wgpu::TextureViewDescriptor::default());
-    let depth_copy_view = target
-        .depth_copy
-        .as_ref()
-        .map(|d| d.texture().create_view(&wgpu::TextureViewDescriptor::default()));
-    let depth_view = target
-        .depth
-        .texture()
-        .create_view(&wgpu::TextureViewDescriptor::default());
-    let family = ctx.caps.queue_family;
-    let mut cbs: Vec<wgpu::CommandBuffer> = Vec::new();
-    for e in target.exportables_mut() {
-        cbs.extend(e.encode_acquire(&ctx.device, family));
-    }
-    let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-        label: Some("lumiview frame"),
-    });
-    {
-        let mut color_attachments = vec![Some(wgpu::RenderPassColorAttachment {
-            view: &color_view,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                store: wgpu::StoreOp::Store,
-            },
-        })];
-        if let Some(v) = &depth_copy_view {
-            color_attachments.push(Some(wgpu::RenderPassColorAttachment {
-                view: v,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: far,
-                        g: 0.0,
-                        b: 0.0,
-                        a: 1.0,
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
-            }));
-        }
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("luminaire appearance"),
-            color_attachments: &color_attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &depth_view,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(far as f32),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        draw(&mut pass);
-    }
-    cbs.push(enc.finish());
-    for e in target.exportables_mut() {
-        cbs.push(e.encode_release(&ctx.device, family));
-    }
-    if let Some(sem) = &target.semaphores {
-        // GPU-side contract: wait for the host's reads of the previous frame, signal this one's end.
-        if target.frames > 0 {
-            sem.host_done.wait_on_next_submit(&ctx.queue);
-        }
-        sem.render_done.signal_on_next_submit(&ctx.queue);
-    }
-    ctx.scoped("rendering a frame", || {
-        ctx.queue.submit(cbs);
-        Ok(())
-    })?;
-    if target.semaphores.is_some() {
-        let _ = ctx.device.poll(wgpu::PollType::Poll);
-        ctx.check()?;
-    } else {
-        ctx.wait_idle()?;
-    }
-    for e in target.exportables_mut() {
-        e.released = true;
-    }
-    target.frames += 1;
-    Ok(())
 }
 
 /// Luminance (cd/m²) the far-field pass shows for a direction `d` (luminaire frame, towards the eye),

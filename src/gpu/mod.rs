@@ -3,6 +3,8 @@
 //! - [`context`]: device on Vulkan, error handling, device loss, logging.
 //! - [`target`]: render targets (colour + depth outputs), export, read-back.
 //! - [`camera`]: the host's matrices and conventions.
+//! - [`frame`]: one frame: the validated view, the pass interface, recording every pass into the
+//!   target.
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles; the
 //!   CPU geometry it draws and culls with is `nearfield::select` (`lit_bound`, `view`).
@@ -14,6 +16,7 @@
 pub mod camera;
 pub mod context;
 pub mod farfield;
+pub mod frame;
 pub mod nearfield;
 pub mod renderer;
 pub mod residency;
@@ -23,7 +26,7 @@ pub mod target;
 
 pub use camera::{DepthRange, HostCamera, Origin};
 pub use context::{ContextDesc, GpuContext, LogLevel, LogSink};
-pub use farfield::{OutputMode, Overlays, RenderOptions};
+pub use frame::{FrameView, OutputMode, Overlays, RenderOptions};
 pub use renderer::{InstanceId, LuminaireId, Renderer};
 pub use target::{Attachment, ColorFormat, DepthFormat, RenderTarget, TargetDesc};
 
@@ -34,10 +37,10 @@ use crate::photometry::PhotometryError;
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     /// A bad argument, named.
-    #[error("invalid argument '{name}': {message}")]
+    #[error("invalid argument '{arg}': {message}")]
     InvalidArgument {
         /// The argument.
-        name: String,
+        arg: Arg,
         /// Why.
         message: String,
     },
@@ -66,10 +69,88 @@ pub enum GpuError {
 
 impl GpuError {
     /// An invalid-argument error.
-    pub fn invalid(name: impl Into<String>, message: impl Into<String>) -> Self {
+    pub fn invalid(arg: Arg, message: impl Into<String>) -> Self {
         GpuError::InvalidArgument {
-            name: name.into(),
+            arg,
             message: message.into(),
         }
+    }
+}
+
+/// An argument the renderer checks, as its errors name it: a type, so a caller that renames
+/// arguments for its users (the C API's `desc.budget_bytes`, `camera.view`) matches on it rather than
+/// on text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Arg {
+    /// The camera's view matrix (world → eye).
+    View,
+    /// The camera's projection matrix.
+    Projection,
+    /// An instance's model matrix (luminaire frame → world).
+    Model,
+    /// The render options' exposure (m²/cd).
+    Exposure,
+    /// The render options' photometric-solid radius (m).
+    SolidRadius,
+    /// The render options' output mode.
+    Output,
+    /// A render target.
+    Target,
+    /// A target's width and height (pixels).
+    Size,
+    /// A target's exported semaphores.
+    Semaphores,
+    /// Which output of a target.
+    Attachment,
+    /// A luminaire id.
+    Luminaire,
+    /// An instance id.
+    Instance,
+    /// An illuminance query's point and normal.
+    PointNormal,
+    /// An illuminance query's point (m).
+    Point,
+    /// A near-field luminaire's GPU budget (bytes).
+    BudgetBytes,
+    /// A near-field luminaire's content radius (m).
+    ContentRadius,
+    /// A near-field luminaire's proxy mesh.
+    Proxy,
+    /// A near-field scan.
+    Scan,
+    /// A near-field pack's layout.
+    Pack,
+}
+
+impl Arg {
+    /// The argument's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arg::View => "view",
+            Arg::Projection => "projection",
+            Arg::Model => "model",
+            Arg::Exposure => "exposure",
+            Arg::SolidRadius => "solid_radius_m",
+            Arg::Output => "output",
+            Arg::Target => "target",
+            Arg::Size => "width/height",
+            Arg::Semaphores => "semaphores",
+            Arg::Attachment => "attachment",
+            Arg::Luminaire => "luminaire",
+            Arg::Instance => "instance",
+            Arg::PointNormal => "point/normal",
+            Arg::Point => "point",
+            Arg::BudgetBytes => "budget_bytes",
+            Arg::ContentRadius => "content_radius_m",
+            Arg::Proxy => "proxy",
+            Arg::Scan => "scan",
+            Arg::Pack => "pack",
+        }
+    }
+}
+
+impl std::fmt::Display for Arg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
     }
 }

@@ -12,10 +12,11 @@ use glam::Mat4;
 
 use super::camera::HostCamera;
 use super::context::{ContextDesc, GpuContext};
-use super::farfield::{render_frame, FarfieldLuminaire, FarfieldPass, RenderOptions};
+use super::farfield::{FarfieldLuminaire, FarfieldPass};
+use super::frame::{self, FrameView, RenderOptions};
 use super::nearfield::{NearfieldLuminaire, NearfieldOptions, NearfieldPass, NearfieldSettings};
 use super::target::RenderTarget;
-use super::GpuError;
+use super::{Arg, GpuError};
 use crate::nearfield::pack::Pack;
 use crate::photometry::{self, LoadOptions, Photometry};
 
@@ -121,7 +122,7 @@ impl Renderer {
         let inst = self
             .instances
             .get_mut(&id)
-            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))?;
+            .ok_or_else(|| GpuError::invalid(Arg::Instance, format!("no instance with id {}", id.0)))?;
         inst.nearfield = settings;
         Ok(())
     }
@@ -130,14 +131,14 @@ impl Renderer {
     pub fn luminaire(&self, id: LuminaireId) -> Result<&Luminaire, GpuError> {
         self.luminaires
             .get(&id)
-            .ok_or_else(|| GpuError::invalid("luminaire", format!("no luminaire with id {}", id.0)))
+            .ok_or_else(|| GpuError::invalid(Arg::Luminaire, format!("no luminaire with id {}", id.0)))
     }
 
     /// Removes a luminaire and every instance of it.
     pub fn remove_luminaire(&mut self, id: LuminaireId) -> Result<(), GpuError> {
         self.luminaires
             .remove(&id)
-            .ok_or_else(|| GpuError::invalid("luminaire", format!("no luminaire with id {}", id.0)))?;
+            .ok_or_else(|| GpuError::invalid(Arg::Luminaire, format!("no luminaire with id {}", id.0)))?;
         self.instances.retain(|_, i| i.luminaire != id);
         Ok(())
     }
@@ -168,7 +169,7 @@ impl Renderer {
         check_model(&model)?;
         let inst = self.instances.get_mut(&id).ok_or_else(|| {
             GpuError::invalid(
-                "instance",
+                Arg::Instance,
                 format!("no instance with id {} (destroyed, or its luminaire was)", id.0),
             )
         })?;
@@ -181,7 +182,7 @@ impl Renderer {
         self.instances
             .get(&id)
             .map(|i| (i.luminaire, i.model))
-            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))
+            .ok_or_else(|| GpuError::invalid(Arg::Instance, format!("no instance with id {}", id.0)))
     }
 
     /// Illuminance in lux at a world point on a surface with unit normal `normal` from one instance,
@@ -193,13 +194,13 @@ impl Renderer {
         let (lum, model) = self.instance(id)?;
         let Some(p) = self.luminaire(lum)?.photometry() else {
             return Err(GpuError::invalid(
-                "instance",
+                Arg::Instance,
                 "the luminaire has no far-field photometry",
             ));
         };
         if !point.is_finite() || !normal.is_finite() || normal.length_squared() < 1e-12 {
             return Err(GpuError::invalid(
-                "point/normal",
+                Arg::PointNormal,
                 "must be finite with a non-zero normal",
             ));
         }
@@ -208,7 +209,7 @@ impl Renderer {
         let r2 = to_point.length_squared();
         if r2 < 1e-12 {
             return Err(GpuError::invalid(
-                "point",
+                Arg::Point,
                 "coincides with the luminaire's photometric centre",
             ));
         }
@@ -223,7 +224,7 @@ impl Renderer {
         self.instances
             .remove(&id)
             .map(|_| ())
-            .ok_or_else(|| GpuError::invalid("instance", format!("no instance with id {}", id.0)))
+            .ok_or_else(|| GpuError::invalid(Arg::Instance, format!("no instance with id {}", id.0)))
     }
 
     /// Renders every instance into `target`.
@@ -233,36 +234,29 @@ impl Renderer {
         camera: &HostCamera,
         options: &RenderOptions,
     ) -> Result<(), GpuError> {
-        camera.validate()?;
-        options.validate(target)?;
+        let view = FrameView::new(camera, options, &target.desc)?;
         self.ctx.check()?;
-        let mut far: Vec<(&FarfieldLuminaire, Mat4)> = Vec::with_capacity(self.instances.len());
+        let mut far: Vec<(Arc<FarfieldLuminaire>, Mat4)> = Vec::with_capacity(self.instances.len());
         let mut near: Vec<(Arc<NearfieldLuminaire>, Mat4, NearfieldSettings)> = Vec::new();
         for inst in self.instances.values() {
             match self.luminaires.get(&inst.luminaire) {
-                Some(Luminaire::Farfield(f)) => far.push((f.as_ref(), inst.model)),
+                Some(Luminaire::Farfield(f)) => far.push((f.clone(), inst.model)),
                 Some(Luminaire::Nearfield(n)) => near.push((n.clone(), inst.model, inst.nearfield)),
                 None => {}
             }
         }
-        let far_frame = self.farfield.prepare(&self.ctx, target, camera, options, &far)?;
-        let near_frame = self
-            .nearfield
-            .prepare(&self.ctx, &target.desc, camera, options, &near)?;
-        let (farfield, nearfield) = (&self.farfield, &self.nearfield);
-        render_frame(&self.ctx, target, camera, |pass| {
-            farfield.draw(&far_frame, pass);
-            nearfield.draw(&near_frame, pass);
-        })
+        let far = frame::prepare(&mut self.farfield, &self.ctx, &view, &far)?;
+        let near = frame::prepare(&mut self.nearfield, &self.ctx, &view, &near)?;
+        frame::render(&self.ctx, target, &view, &[&far, &near])
     }
 }
 
 fn check_model(m: &Mat4) -> Result<(), GpuError> {
     if !m.is_finite() {
-        return Err(GpuError::invalid("model", "matrix has a NaN or infinite element"));
+        return Err(GpuError::invalid(Arg::Model, "matrix has a NaN or infinite element"));
     }
     if m.determinant().abs() < 1e-30 {
-        return Err(GpuError::invalid("model", "matrix is singular"));
+        return Err(GpuError::invalid(Arg::Model, "matrix is singular"));
     }
     Ok(())
 }

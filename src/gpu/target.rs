@@ -5,7 +5,7 @@
 use std::os::fd::OwnedFd;
 
 use super::context::GpuContext;
-use super::GpuError;
+use super::{Arg, GpuError};
 use crate::interop::{ExportInfo, ExportableImage, ExportableSemaphore};
 
 /// The two semaphores of a target synchronised on the GPU.
@@ -207,13 +207,13 @@ impl RenderTarget {
     pub fn new(ctx: &GpuContext, desc: &TargetDesc) -> Result<Self, GpuError> {
         if desc.width == 0 || desc.height == 0 || desc.width > MAX_TARGET_SIZE || desc.height > MAX_TARGET_SIZE {
             return Err(GpuError::invalid(
-                "width/height",
+                Arg::Size,
                 format!("{}×{} is outside 1…{MAX_TARGET_SIZE}", desc.width, desc.height),
             ));
         }
         if desc.semaphores && !desc.exportable {
             return Err(GpuError::invalid(
-                "semaphores",
+                Arg::Semaphores,
                 "semaphores synchronise exported images: set exportable too",
             ));
         }
@@ -298,13 +298,13 @@ impl RenderTarget {
             Attachment::Color => Ok(&self.color),
             Attachment::Depth => match self.desc.depth {
                 DepthFormat::None => Err(GpuError::invalid(
-                    "attachment",
+                    Arg::Attachment,
                     "the target has no depth output (created with depth format NONE)",
                 )),
                 DepthFormat::R32Float => self
                     .depth_copy
                     .as_ref()
-                    .ok_or_else(|| GpuError::invalid("attachment", "missing depth copy")),
+                    .ok_or_else(|| GpuError::invalid(Arg::Attachment, "missing depth copy")),
                 DepthFormat::Depth32Float => Ok(&self.depth),
             },
         }
@@ -340,7 +340,7 @@ impl RenderTarget {
         let s = self
             .semaphores
             .as_ref()
-            .ok_or_else(|| GpuError::invalid("target", "the target was created without semaphores"))?;
+            .ok_or_else(|| GpuError::invalid(Arg::Target, "the target was created without semaphores"))?;
         Ok((s.render_done.export_fd()?, s.host_done.export_fd()?))
     }
 
@@ -359,7 +359,7 @@ impl RenderTarget {
     pub fn read_luminance(&mut self, ctx: &GpuContext) -> Result<Vec<f32>, GpuError> {
         if self.desc.color != ColorFormat::Rgba32Float {
             return Err(GpuError::invalid(
-                "target",
+                Arg::Target,
                 "luminance read-back needs an RGBA32F colour target",
             ));
         }
@@ -375,7 +375,7 @@ impl RenderTarget {
     pub fn read(&mut self, ctx: &GpuContext, which: Attachment) -> Result<Vec<u8>, GpuError> {
         if self.frames == 0 {
             return Err(GpuError::invalid(
-                "target",
+                Arg::Target,
                 "nothing has been rendered into the target yet",
             ));
         }

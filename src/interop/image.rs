@@ -52,7 +52,7 @@ pub struct ExportableImage {
     pub info: ExportInfo,
     /// Whether the image has been released to the external queue family at least once (the next
     /// frame must acquire it back first).
-    pub released: bool,
+    released: bool,
 }
 
 /// Whether `format` can be created as an exportable optimal-tiling image with `usage`.
@@ -348,9 +348,15 @@ impl ExportableImage {
         ))
     }
 
+    /// Notes that the release recorded by [`ExportableImage::encode_release`] was submitted: the
+    /// image now belongs to the host, and the next frame acquires it first.
+    pub fn mark_released(&mut self) {
+        self.released = true;
+    }
+
     /// Records the release to `VK_QUEUE_FAMILY_EXTERNAL` (attachment layout → [`RELEASE_LAYOUT`]).
     /// Call only when wgpu's last use of the texture in this submission left it in its attachment
-    /// state; mark [`ExportableImage::released`] after submitting.
+    /// state; call [`ExportableImage::mark_released`] after submitting it.
     pub fn encode_release(&self, device: &wgpu::Device, queue_family: u32) -> wgpu::CommandBuffer {
         self.encode_barrier(
             device,

@@ -1,7 +1,18 @@
 //! A scanned luminaire on the GPU ([`NearfieldLuminaire`]) and making the chunks a view can read
 //! resident.
 
-use super::*;
+use std::sync::{Arc, Mutex};
+
+use glam::{DVec3, Mat4, Vec4};
+
+use super::records::PoolLayout;
+use crate::gpu::context::GpuContext;
+use crate::gpu::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
+use crate::gpu::{Arg, GpuError};
+use crate::nearfield::pack::Pack;
+use crate::nearfield::select::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
+use crate::nearfield::select::view::view_cells;
+use crate::nearfield::select::{Selection, SelectionMode};
 
 /// A scanned luminaire on the GPU; instances share it.
 pub struct NearfieldLuminaire {
@@ -218,7 +229,7 @@ impl NearfieldLuminaire {
         let mut r = self.residency.lock().unwrap_or_else(|p| p.into_inner());
         let uploads = r
             .make_resident(&needed)
-            .map_err(|m| GpuError::invalid("budget_bytes", m))?;
+            .map_err(|m| GpuError::invalid(Arg::BudgetBytes, m))?;
         if uploads.is_empty() {
             return Ok(());
         }
@@ -254,7 +265,7 @@ impl NearfieldLuminaire {
         needed.dedup();
         let uploads = r
             .make_resident(&needed)
-            .map_err(|m| GpuError::invalid("budget_bytes", m))?;
+            .map_err(|m| GpuError::invalid(Arg::BudgetBytes, m))?;
         self.write_chunks(ctx, uploads, &r.map)
     }
 }

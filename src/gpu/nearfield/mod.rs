@@ -13,24 +13,7 @@
 //! - `pass.rs`: [`NearfieldPass`]: pipelines, a frame's draws (`prepare`), and drawing them;
 //! - `records.rs`: the GPU-side layout: storage blocks, pool layout, vertex layouts, buffers.
 
-use std::collections::HashMap;
-use std::sync::{Arc, Mutex};
-
-use glam::{DVec3, Mat4, Vec4};
-
-use super::camera::HostCamera;
-use super::context::GpuContext;
-use super::farfield::{OutputMode, RenderOptions};
-use super::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
-use super::shaders::CAMERA_RECORD_VEC4S;
-use super::slots::{DrawSlots, SLOT};
-use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, TargetDesc, POSITION_LAYOUT};
-use super::GpuError;
-use crate::nearfield::bvh::ProxyBvh;
-use crate::nearfield::pack::Pack;
-use crate::nearfield::select::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
-use crate::nearfield::select::view::{content_radius_m, view_cells};
-use crate::nearfield::select::{Selection, SelectionMode, SelectionOptions};
+use crate::nearfield::select::{SelectionMode, SelectionOptions};
 
 /// Pool pages a luminaire can bind (the shader declares this many).
 pub const MAX_POOL_PAGES: usize = 8;
@@ -102,5 +85,5 @@ pub use luminaire::{NearfieldLuminaire, ResidencyReport};
 #[cfg(test)]
 pub(crate) use pass::pipeline_constant_names;
 pub use pass::{NearfieldFrame, NearfieldPass};
-use records::{bounding_box, buffer_init, storage_entry, PoolLayout, POLYGON_LAYOUT};
+#[cfg(test)]
 pub(crate) use records::{DrawUniform, LumUniform};

@@ -1,6 +1,19 @@
 //! The near-field pass: pipelines (one per [`PipelineKey`]), a frame's draws, and drawing them.
 
-use super::*;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::Mat4;
+
+use super::luminaire::NearfieldLuminaire;
+use super::records::{storage_entry, DrawUniform, LumUniform, PoolLayout, POLYGON_LAYOUT};
+use super::{NearfieldSettings, MAX_POOL_PAGES};
+use crate::gpu::context::GpuContext;
+use crate::gpu::frame::{FrameView, Pass};
+use crate::gpu::slots::{DrawSlots, SLOT};
+use crate::gpu::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat, POSITION_LAYOUT};
+use crate::gpu::GpuError;
+use crate::nearfield::select::lit_bound::{PolygonKind, PolygonVertex};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
@@ -230,18 +243,24 @@ impl NearfieldPass {
         self.pipelines.insert(key, p.clone());
         Ok(p)
     }
+}
+
+impl Pass for NearfieldPass {
+    /// A scanned luminaire, its model matrix (luminaire frame → world, validated by the renderer)
+    /// and the instance's settings.
+    type Instance = (Arc<NearfieldLuminaire>, Mat4, NearfieldSettings);
+    type Prepared = NearfieldFrame;
 
     /// Prepares a frame: makes resident what each luminaire's instances can select (all instances of
-    /// a luminaire together) and writes the draw uniforms. The draws happen in [`NearfieldPass::draw`]
+    /// a luminaire together) and writes the draw uniforms. The draws happen in [`Pass::record`]
     /// inside the frame's render pass.
-    pub fn prepare(
+    fn prepare(
         &mut self,
         ctx: &GpuContext,
-        target: &TargetDesc,
-        camera: &HostCamera,
-        options: &RenderOptions,
-        instances: &[(Arc<NearfieldLuminaire>, Mat4, NearfieldSettings)],
+        view: &FrameView,
+        instances: &[Self::Instance],
     ) -> Result<NearfieldFrame, GpuError> {
+        let (target, camera, options) = (view.target(), view.camera(), view.options());
         if instances.is_empty() {
             return Ok(NearfieldFrame::default());
         }
@@ -250,12 +269,8 @@ impl NearfieldPass {
         let mut per_lum: Vec<(Arc<NearfieldLuminaire>, Vec<u32>)> = Vec::new();
         let mut slots: Vec<DrawUniform> = Vec::with_capacity(instances.len());
         let mut draws = Vec::with_capacity(instances.len());
-        let clip_from_world = camera.clip_from_world();
-        let mode_out = if options.output == OutputMode::ToneMapped {
-            1.0
-        } else {
-            0.0
-        };
+        let clip_from_world = view.clip_from_world();
+        let mode_out = view.output_flag();
         let mut polygons: Vec<PolygonVertex> = Vec::new();
         for (lum, model, settings) in instances {
             let eye = camera.eye_in(*model);
@@ -362,8 +377,7 @@ impl NearfieldPass {
         Ok(NearfieldFrame { draws: with_pipelines })
     }
 
-    /// Records a prepared frame's draws into the frame's render pass.
-    pub fn draw(&self, frame: &NearfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
+    fn record(&self, frame: &NearfieldFrame, pass: &mut wgpu::RenderPass<'_>) {
         let Some(ubind) = self.uniforms.bind_group() else {
             return;
         };

@@ -2,7 +2,10 @@
 //! shaders/nearfield.wgsl), the pool layout given as pipeline constants, the polygon vertex layout,
 //! and buffer helpers.
 
-use super::*;
+use glam::DVec3;
+
+use crate::gpu::context::GpuContext;
+use crate::nearfield::select::lit_bound::PolygonVertex;
 
 /// Storage block of one luminaire (`Lum` in shaders/nearfield.wgsl, which documents the members;
 /// `gpu::shaders` tests the two layouts are one).

@@ -62,15 +62,19 @@ pub fn load_ray_image_set(
 ) -> Result<(RayImageSet, ImportReport), Box<dyn std::error::Error>> {
     // A single `.lvpack` carries its cameras; a TM-25 ray file has none of its own: it shows the
     // virtual scan it is binned into (the one `render` draws); otherwise manifests.
-    use lumiview::nearfield::scanfile::{detect, open_scan_of_kind, ScanFileKind};
+    use lumiview::source::{self, Source, SourceKind, SourceOptions};
     for one in scan {
-        match detect(one)? {
-            Some(ScanFileKind::Pack) if scan.len() == 1 => {
+        match source::detect(one)? {
+            SourceKind::Pack if scan.len() == 1 => {
                 let pack = lumiview::nearfield::pack::Pack::open(one)?;
                 return Ok((pack.rayset().clone(), ImportReport::default()));
             }
-            Some(ScanFileKind::RayFile) if scan.len() == 1 => {
-                let (pack, cached) = open_scan_of_kind(one, ScanFileKind::RayFile, None)?;
+            SourceKind::RayFile if scan.len() == 1 => {
+                let Source::Scan { pack, cached } =
+                    source::open(one, SourceKind::RayFile, &SourceOptions::default(), &mut Vec::new())?
+                else {
+                    return Err(format!("{}: not a scan", one.display()).into());
+                };
                 eprintln!(
                     "lumiview: note: {} is a TM-25 ray file, which has no cameras: these are the cameras of the \
                      virtual scan it is binned into for `render`{} (`lumiview rays2scan` chooses others)",
@@ -79,12 +83,12 @@ pub fn load_ray_image_set(
                 );
                 return Ok((pack.rayset().clone(), ImportReport::default()));
             }
-            Some(ScanFileKind::Manifest) => {}
-            Some(kind) => {
+            SourceKind::Manifest => {}
+            kind @ (SourceKind::Pack | SourceKind::RayFile) => {
                 return Err(format!(
                     "{}: a {} cannot be combined with other scan files",
                     one.display(),
-                    if kind == ScanFileKind::Pack {
+                    if kind == SourceKind::Pack {
                         ".lvpack"
                     } else {
                         "TM-25 ray file"
@@ -92,7 +96,7 @@ pub fn load_ray_image_set(
                 )
                 .into())
             }
-            None => {
+            SourceKind::Photometry => {
                 return Err(format!(
                     "{}: not a near-field scan: expected a .lvpack, a scan manifest (.json) or a TM-25 ray file",
                     one.display()

@@ -9,8 +9,9 @@ use lumiview::photometry::summary::Summary;
 use lumiview::photometry::Photometry;
 use serde_json::{json, Value};
 
-use super::{csv_row, detect_kind, expand_inputs, fmt_num, load_quiet, pack, print_report, rays, CliResult, FileKind};
+use super::{csv_row, expand_inputs, fmt_num, load_quiet, pack, print_report, rays, CliResult};
 use crate::LoadArgs;
+use lumiview::source::{self, SourceKind};
 
 /// `lumiview info FILE…`; `verify` (`--verify`) checks every page of a `.lvpack`.
 pub fn info(files: &[PathBuf], as_json: bool, verify: bool, args: &LoadArgs) -> CliResult {
@@ -25,14 +26,15 @@ pub fn info(files: &[PathBuf], as_json: bool, verify: bool, args: &LoadArgs) -> 
 }
 
 fn info_one(file: &Path, as_json: bool, verify: bool, args: &LoadArgs) -> CliResult {
-    let kind = detect_kind(file)?;
-    if verify && !matches!(kind, FileKind::Pack) {
+    let kind = source::detect(file)?;
+    if verify && !matches!(kind, SourceKind::Pack) {
         return Err(format!("{}: --verify applies to .lvpack files", file.display()).into());
     }
     match kind {
-        FileKind::Photometry => {}
-        FileKind::RayFile => return rays::info_rayfile(file, as_json),
-        FileKind::Pack => return pack::info_pack(file, as_json, verify),
+        // A manifest goes to the photometry reader, which says it is not IES or EULUMDAT.
+        SourceKind::Photometry | SourceKind::Manifest => {}
+        SourceKind::RayFile => return rays::info_rayfile(file, as_json),
+        SourceKind::Pack => return pack::info_pack(file, as_json, verify),
     }
     let p = load_quiet(file, args)?;
     let s = p.summary();

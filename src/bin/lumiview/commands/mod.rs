@@ -53,30 +53,6 @@ pub use synth::{synth, SynthArgs};
 
 use crate::LoadArgs;
 
-/// What kind of input file `info` was given.
-enum FileKind {
-    /// IES or EULUMDAT.
-    Photometry,
-    /// IES TM-25 ray file.
-    RayFile,
-    /// lumiview `.lvpack` near-field store.
-    Pack,
-}
-
-/// Detects the kind of a file by its first bytes (`nearfield::scanfile`: "TM25", "LVPACK"), else
-/// photometry (whose reader reports an unreadable file).
-///
-/// Errors: a path that is not a regular file, or a `.lvpack` without the pack's magic (empty or
-/// half-written), naming the file: it is never handed to the photometry reader.
-fn detect_kind(file: &Path) -> Result<FileKind, lumiview::nearfield::NearfieldError> {
-    use lumiview::nearfield::scanfile::{detect, ScanFileKind};
-    Ok(match detect(file)? {
-        Some(ScanFileKind::RayFile) => FileKind::RayFile,
-        Some(ScanFileKind::Pack) => FileKind::Pack,
-        _ => FileKind::Photometry,
-    })
-}
-
 /// Parses a camera layout: `rigo:N` (N cameras per hemisphere, 2° overlap, 0.05° jitter),
 /// `fibonacci:N` or `grid:P,T`.
 pub fn parse_layout(text: &str) -> Result<lumiview::nearfield::layout::Layout, String> {

@@ -10,6 +10,7 @@ use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackProxy, PackSt
 use lumiview::nearfield::scanfile::{self, ScanFileKind};
 use lumiview::nearfield::synth::{synth_scan, SynthOptions};
 use lumiview::nearfield::{Hemisphere, Scan};
+use lumiview::source::{self, SourceKind};
 use serde_json::json;
 
 use super::{print_report, CliResult};
@@ -101,8 +102,8 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
     let Some(file) = args.input.first() else {
         return Err("nothing to pack: give a scan manifest, a ray file, an .lvpack or --synth LUMINAIRE".into());
     };
-    let kind = scanfile::detect(file)?;
-    if !matches!(kind, Some(ScanFileKind::Pack | ScanFileKind::RayFile)) {
+    let kind = source::detect(file)?;
+    if !matches!(kind, SourceKind::Pack | SourceKind::RayFile) {
         let opts = ImportOptions {
             skip_bad: args.skip_bad_images,
             verify_pixels: false,
@@ -128,7 +129,7 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
     if args.input.len() > 1 {
         return Err("several inputs are only allowed for scan manifests (one per hemisphere)".into());
     }
-    if kind == Some(ScanFileKind::Pack) {
+    if kind == SourceKind::Pack {
         let pack = Pack::open(file)?;
         let desc = format!("repacked from {} ({})", file.display(), pack.metadata().source);
         let proxy = pack.proxy().cloned();

@@ -14,9 +14,9 @@ use lumiview::gpu::{
     RenderOptions, RenderTarget, Renderer, TargetDesc,
 };
 use lumiview::nearfield::proxy::load_gltf;
-use lumiview::nearfield::scanfile::detect;
 use lumiview::nearfield::select::SelectionMode;
 use lumiview::photometry::web::direction;
+use lumiview::source::{self, Source, SourceKind, SourceOptions};
 
 use super::CliResult;
 use crate::LoadArgs;
@@ -203,14 +203,14 @@ pub fn render(a: &RenderArgs) -> CliResult {
         }
     }
     // Read and check the input before starting the GPU: options that do not apply are errors.
-    let kind = detect(&a.file)?;
-    if kind == Some(lumiview::nearfield::scanfile::ScanFileKind::Manifest) && a.output.exists() {
+    let kind = source::detect(&a.file)?;
+    if kind == SourceKind::Manifest && a.output.exists() {
         // Never write over one of the scan's images (read the manifest only when that could be).
         let m = lumiview::nearfield::manifest::read_manifest(&a.file)?;
         lumiview::files::ensure_not_input(&a.output, m.entries.iter().map(|e| e.file.as_path()))?;
     }
-    let photometry = match kind {
-        Some(_) => {
+    let photometry = match kind.is_scan() {
+        true => {
             for (given, name) in [
                 (a.solid, "--solid"),
                 (a.housing, "--housing"),
@@ -227,7 +227,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
             }
             None
         }
-        None => {
+        false => {
             if a.proxy.is_some() || a.no_proxy {
                 return Err(format!(
                     "--proxy / --no-proxy apply to near-field scans; {} is a photometric file",
@@ -258,11 +258,13 @@ pub fn render(a: &RenderArgs) -> CliResult {
         }
     };
     let mut r = Renderer::new(&ContextDesc::default())?;
-    let loaded = match (kind, photometry) {
-        (Some(kind), _) => {
+    let loaded = match photometry {
+        None => {
             let mut warnings = Vec::new();
-            let (pack, cached) =
-                lumiview::nearfield::scanfile::open_scan_of_kind_with_warnings(&a.file, kind, None, &mut warnings)?;
+            let Source::Scan { pack, cached } = source::open(&a.file, kind, &SourceOptions::default(), &mut warnings)?
+            else {
+                return Err(format!("{}: opened as photometry, not as a scan", a.file.display()).into());
+            };
             for w in &warnings {
                 eprintln!("lumiview: warning: {w}");
             }
@@ -331,7 +333,7 @@ pub fn render(a: &RenderArgs) -> CliResult {
                 ),
             }
         }
-        (None, Some(p)) => {
+        Some(p) => {
             let lum = r.add_photometry(p.clone())?;
             r.add_instance(lum, Mat4::IDENTITY)?;
             let l_here = p.luminance(c, g).unwrap_or(0.0);
@@ -343,7 +345,6 @@ pub fn render(a: &RenderArgs) -> CliResult {
                 what: format!("far-field, L = {l_here:.1} cd/m² at the centre"),
             }
         }
-        (None, None) => return Err(format!("{}: nothing was loaded", a.file.display()).into()),
     };
     let color = if exr {
         ColorFormat::Rgba32Float
