@@ -15,14 +15,6 @@
 // release; 2 `lumi_luminaire_info` gained the near-field fields (`camera_count` … `budget_bytes`).
 #define LUMI_ABI_VERSION 2
 
-// Luminaire kind: far-field photometry (IES LM-63 or EULUMDAT).
-#define LUMI_LUMINAIRE_FARFIELD 0
-
-// Luminaire kind: a near-field scan (`.lvpack`, JSON scan manifest or TM-25 ray file) drawn with
-// its measured luminance. The far-field-only calls (`lumi_luminaire_sample`, `lumi_luminaire_lut`,
-// `lumi_instance_illuminance`) refuse it with `LUMI_STATUS_INVALID_ARGUMENT`.
-#define LUMI_LUMINAIRE_NEARFIELD 1
-
 // Near-field camera selection (values fixed): the single nearest capture camera per pixel (the
 // reference viewer's choice; features jump where the choice changes).
 #define LUMI_SELECTION_NEAREST 0
@@ -34,6 +26,14 @@
 // Near-field camera selection: barycentric weights over the spherical Delaunay triangle of capture
 // cameras around the view direction (continuous; the default).
 #define LUMI_SELECTION_CONTINUOUS 2
+
+// Luminaire kind: far-field photometry (IES LM-63 or EULUMDAT).
+#define LUMI_LUMINAIRE_FARFIELD 0
+
+// Luminaire kind: a near-field scan (`.lvpack`, JSON scan manifest or TM-25 ray file) drawn with
+// its measured luminance. The far-field-only calls (`lumi_luminaire_sample`, `lumi_luminaire_lut`,
+// `lumi_instance_illuminance`) refuse it with `LUMI_STATUS_INVALID_ARGUMENT`.
+#define LUMI_LUMINAIRE_NEARFIELD 1
 
 // Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 #define LUMI_OPENING_POINT 0
@@ -185,6 +185,12 @@ typedef struct lumi_device_caps {
   bool is_cpu;
 } lumi_device_caps;
 
+// Handle of a luminaire, owned by its context (0 is never a valid handle).
+typedef uint64_t lumi_luminaire;
+
+// Handle of an instance, owned by its context (0 is never a valid handle).
+typedef uint64_t lumi_instance;
+
 // How to load a luminaire (`lumi_luminaire_load_ex`). Start from `lumi_luminaire_desc_default()`.
 // The near-field fields apply to scans (`.lvpack`, JSON scan manifest, TM-25 ray file); for a
 // photometric file (IES, EULUMDAT) `cache_dir` is ignored, `budget_bytes` is checked (> 0, as for
@@ -213,23 +219,6 @@ typedef struct lumi_luminaire_desc {
   // `<temp>/lumiview-cache/packs` (docs/ffi-conventions.md, "Near-field scans").
   const char *cache_dir;
 } lumi_luminaire_desc;
-
-// Which host-lighting look-up table to produce (docs/lut-and-solid.md has the texel mapping).
-typedef struct lumi_lut_desc {
-  // `LUMI_LUT_2D` (C × γ) or `LUMI_LUT_1D` (over cos γ).
-  uint32_t kind;
-  // Texels along C (2D) or cos γ (1D), 2…8192.
-  uint32_t width;
-  // Texels along γ (2D; ignored for 1D), 2…8192.
-  uint32_t height;
-  // Divide by the maximum intensity (values 0…1) instead of absolute cd.
-  bool normalize;
-  // `LUMI_LUT_F32`, `LUMI_LUT_F16` or `LUMI_LUT_U8` (U8 implies normalised).
-  uint32_t encoding;
-} lumi_lut_desc;
-
-// Handle of a luminaire, owned by its context (0 is never a valid handle).
-typedef uint64_t lumi_luminaire;
 
 // Facts about a luminaire. Units: cd, lm, m. The far-field fields (`max_intensity_cd` …
 // `housing_size_m`) are 0 (`opening_shape` `LUMI_OPENING_POINT`) for a near-field luminaire, and
@@ -274,8 +263,19 @@ typedef struct lumi_luminaire_info {
   uint64_t budget_bytes;
 } lumi_luminaire_info;
 
-// Handle of an instance, owned by its context (0 is never a valid handle).
-typedef uint64_t lumi_instance;
+// Which host-lighting look-up table to produce (docs/lut-and-solid.md has the texel mapping).
+typedef struct lumi_lut_desc {
+  // `LUMI_LUT_2D` (C × γ) or `LUMI_LUT_1D` (over cos γ).
+  uint32_t kind;
+  // Texels along C (2D) or cos γ (1D), 2…8192.
+  uint32_t width;
+  // Texels along γ (2D; ignored for 1D), 2…8192.
+  uint32_t height;
+  // Divide by the maximum intensity (values 0…1) instead of absolute cd.
+  bool normalize;
+  // `LUMI_LUT_F32`, `LUMI_LUT_F16` or `LUMI_LUT_U8` (U8 implies normalised).
+  uint32_t encoding;
+} lumi_lut_desc;
 
 // The host's camera for one frame. Conventions, with a worked GL and Vulkan projection:
 // docs/ffi-conventions.md, "The camera".
@@ -467,13 +467,67 @@ void lumi_context_destroy(struct lumi_context *ctx);
 // `ctx` is a live context; `out` points to writable storage (written only on success).
 lumi_status lumi_context_caps(const struct lumi_context *ctx, struct lumi_device_caps *out);
 
+// Creates an instance of a luminaire with a model matrix (luminaire frame → world, column-major
+// `float[16]`, metres). `out` is written only on success.
+//
+// # Safety
+// `ctx` is a live context; `model` points to 16 floats; `out` writable.
+lumi_status lumi_instance_create(struct lumi_context *ctx,
+                                 lumi_luminaire luminaire,
+                                 const float *model,
+                                 lumi_instance *out);
+
+// Sets an instance's model matrix (column-major `float[16]`).
+//
+// # Safety
+// `ctx` is a live context; `model` points to 16 floats.
+lumi_status lumi_instance_set_transform(struct lumi_context *ctx,
+                                        lumi_instance instance,
+                                        const float *model);
+
+// Frees an instance. Handle 0 is ignored; a stale handle is an error.
+//
+// # Safety
+// `ctx` is a live context.
+lumi_status lumi_instance_destroy(struct lumi_context *ctx, lumi_instance instance);
+
+// Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
+// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
+// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
+//
+// # Safety
+// `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
+lumi_status lumi_instance_illuminance(const struct lumi_context *ctx,
+                                      lumi_instance instance,
+                                      const float *point,
+                                      const float *normal,
+                                      double *lux);
+
+// Sets how an instance of a near-field luminaire draws: which capture cameras a pixel takes its
+// luminance from, and whether it reprojects through the luminaire's proxy mesh. New instances use
+// `LUMI_SELECTION_CONTINUOUS` with the proxy on.
+//
+// - `selection_mode`: `LUMI_SELECTION_NEAREST`, `LUMI_SELECTION_IDW4` or
+//   `LUMI_SELECTION_CONTINUOUS`.
+// - `use_proxy`: use the proxy mesh when the luminaire has one (`lumi_luminaire_info.has_proxy`);
+//   without one (or with false) the view ray is reprojected through the capture sphere and depth is
+//   a stand-in (docs/ffi-conventions.md, "Near-field scans").
+//
+// Takes effect from the next `lumi_render`. Errors: `LUMI_STATUS_INVALID_ARGUMENT` for an unknown
+// `selection_mode` (nothing changes), a stale instance, or an instance of a far-field luminaire.
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context.
+lumi_status lumi_instance_set_nearfield(struct lumi_context *ctx,
+                                        lumi_instance instance,
+                                        uint32_t selection_mode,
+                                        bool use_proxy);
+
 // A default luminaire description: budget 512 MiB, no proxy, content radius derived from the scan,
 // default cache folder.
 struct lumi_luminaire_desc lumi_luminaire_desc_default(void);
-
-// A default look-up table description: 2D, 360 × 181 (1° steps: texel i at C = 360 i / W,
-// row j at γ = 180 j / (H − 1)), absolute cd, f32.
-struct lumi_lut_desc lumi_lut_desc_default(void);
 
 // Loads a luminaire from a file and uploads it, with the defaults of `lumi_luminaire_desc_default()`
 // (`lumi_luminaire_load_ex(ctx, path, NULL, out)`). The format is detected from the file's first
@@ -584,6 +638,10 @@ lumi_status lumi_luminaire_sample(const struct lumi_context *ctx,
                                   double *intensity_cd,
                                   double *luminance_cd_m2);
 
+// A default look-up table description: 2D, 360 × 181 (1° steps: texel i at C = 360 i / W,
+// row j at γ = 180 j / (H − 1)), absolute cd, f32.
+struct lumi_lut_desc lumi_lut_desc_default(void);
+
 // Writes a host-lighting look-up table into `buffer` (row-major, row 0 = γ 0° for 2D; texel i of
 // a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
 // gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
@@ -601,64 +659,6 @@ lumi_status lumi_luminaire_lut(const struct lumi_context *ctx,
                                size_t buffer_len,
                                size_t *required_bytes,
                                double *max_intensity_cd);
-
-// Creates an instance of a luminaire with a model matrix (luminaire frame → world, column-major
-// `float[16]`, metres). `out` is written only on success.
-//
-// # Safety
-// `ctx` is a live context; `model` points to 16 floats; `out` writable.
-lumi_status lumi_instance_create(struct lumi_context *ctx,
-                                 lumi_luminaire luminaire,
-                                 const float *model,
-                                 lumi_instance *out);
-
-// Sets an instance's model matrix (column-major `float[16]`).
-//
-// # Safety
-// `ctx` is a live context; `model` points to 16 floats.
-lumi_status lumi_instance_set_transform(struct lumi_context *ctx,
-                                        lumi_instance instance,
-                                        const float *model);
-
-// Frees an instance. Handle 0 is ignored; a stale handle is an error.
-//
-// # Safety
-// `ctx` is a live context.
-lumi_status lumi_instance_destroy(struct lumi_context *ctx, lumi_instance instance);
-
-// Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
-// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
-// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
-//
-// # Safety
-// `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
-lumi_status lumi_instance_illuminance(const struct lumi_context *ctx,
-                                      lumi_instance instance,
-                                      const float *point,
-                                      const float *normal,
-                                      double *lux);
-
-// Sets how an instance of a near-field luminaire draws: which capture cameras a pixel takes its
-// luminance from, and whether it reprojects through the luminaire's proxy mesh. New instances use
-// `LUMI_SELECTION_CONTINUOUS` with the proxy on.
-//
-// - `selection_mode`: `LUMI_SELECTION_NEAREST`, `LUMI_SELECTION_IDW4` or
-//   `LUMI_SELECTION_CONTINUOUS`.
-// - `use_proxy`: use the proxy mesh when the luminaire has one (`lumi_luminaire_info.has_proxy`);
-//   without one (or with false) the view ray is reprojected through the capture sphere and depth is
-//   a stand-in (docs/ffi-conventions.md, "Near-field scans").
-//
-// Takes effect from the next `lumi_render`. Errors: `LUMI_STATUS_INVALID_ARGUMENT` for an unknown
-// `selection_mode` (nothing changes), a stale instance, or an instance of a far-field luminaire.
-//
-// Threading: one thread at a time per context.
-//
-// # Safety
-// `ctx` is a live context.
-lumi_status lumi_instance_set_nearfield(struct lumi_context *ctx,
-                                        lumi_instance instance,
-                                        uint32_t selection_mode,
-                                        bool use_proxy);
 
 // A camera with identity matrices, GL depth range, no reversed Z, bottom-left origin (a GL host).
 struct lumi_camera lumi_camera_default(void);

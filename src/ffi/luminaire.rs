@@ -8,12 +8,10 @@ use std::sync::Arc;
 
 use super::context::{with_context, ContextInner};
 use super::handle;
-use super::{lumi_status, mat_arg, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
-use crate::gpu::nearfield::{NearfieldOptions, NearfieldSettings, DEFAULT_BUDGET_BYTES};
+use super::{lumi_status, path_arg, write_out, FfiError, LUMI_STATUS_BUFFER_TOO_SMALL};
+use crate::gpu::nearfield::{NearfieldOptions, DEFAULT_BUDGET_BYTES};
 use crate::gpu::renderer::Luminaire;
-use crate::gpu::{Arg, GpuError, InstanceId, LogLevel, LuminaireId};
-use crate::nearfield::select::SelectionMode;
-use crate::photometry::lut::{Lut, LutEncoding, LutTexels};
+use crate::gpu::{Arg, GpuError, LogLevel, LuminaireId};
 use crate::photometry::{OpeningShape, Photometry};
 use crate::source::{self, Source, SourceError, SourceOptions};
 
@@ -28,38 +26,6 @@ pub const LUMI_LUMINAIRE_FARFIELD: u32 = 0;
 /// its measured luminance. The far-field-only calls (`lumi_luminaire_sample`, `lumi_luminaire_lut`,
 /// `lumi_instance_illuminance`) refuse it with `LUMI_STATUS_INVALID_ARGUMENT`.
 pub const LUMI_LUMINAIRE_NEARFIELD: u32 = 1;
-
-/// Near-field camera selection (values fixed): the single nearest capture camera per pixel (the
-/// reference viewer's choice; features jump where the choice changes).
-pub const LUMI_SELECTION_NEAREST: u32 = 0;
-/// Near-field camera selection: the four nearest capture cameras blended by inverse angular
-/// distance.
-pub const LUMI_SELECTION_IDW4: u32 = 1;
-/// Near-field camera selection: barycentric weights over the spherical Delaunay triangle of capture
-/// cameras around the view direction (continuous; the default).
-pub const LUMI_SELECTION_CONTINUOUS: u32 = 2;
-
-/// A selection mode from C (`LUMI_SELECTION_*`); an unknown value is an error.
-struct SelectionArg(SelectionMode);
-
-impl TryFrom<u32> for SelectionArg {
-    type Error = FfiError;
-    fn try_from(v: u32) -> Result<Self, FfiError> {
-        SelectionMode::from_index(v).map(SelectionArg).ok_or_else(|| {
-            FfiError::invalid(
-                "selection_mode",
-                format!("unknown value {v} (LUMI_SELECTION_NEAREST 0, _IDW4 1, _CONTINUOUS 2)"),
-            )
-        })
-    }
-}
-
-// The C constants are literals (cbindgen copies them into the header); they are the modes' indices.
-const _: () = assert!(
-    LUMI_SELECTION_NEAREST == SelectionMode::Nearest.index()
-        && LUMI_SELECTION_IDW4 == SelectionMode::Idw4.index()
-        && LUMI_SELECTION_CONTINUOUS == SelectionMode::Continuous.index()
-);
 
 /// Opening shapes reported by `lumi_luminaire_get_info` (values fixed).
 pub const LUMI_OPENING_POINT: u32 = 0;
@@ -174,64 +140,12 @@ pub extern "C" fn lumi_luminaire_desc_default() -> lumi_luminaire_desc {
     }
 }
 
-/// Look-up table kinds (values fixed).
-pub const LUMI_LUT_2D: u32 = 0;
-/// 1D over cos γ (averaged over C).
-pub const LUMI_LUT_1D: u32 = 1;
-/// Texel encodings: 32-bit float.
-pub const LUMI_LUT_F32: u32 = 0;
-/// 16-bit half float.
-pub const LUMI_LUT_F16: u32 = 1;
-/// 8-bit with gamma 2.2 (always normalised).
-pub const LUMI_LUT_U8: u32 = 2;
-
-/// Which host-lighting look-up table to produce (docs/lut-and-solid.md has the texel mapping).
-#[repr(C)]
-#[derive(Debug, Clone, Copy)]
-pub struct lumi_lut_desc {
-    /// `LUMI_LUT_2D` (C × γ) or `LUMI_LUT_1D` (over cos γ).
-    pub kind: u32,
-    /// Texels along C (2D) or cos γ (1D), 2…8192.
-    pub width: u32,
-    /// Texels along γ (2D; ignored for 1D), 2…8192.
-    pub height: u32,
-    /// Divide by the maximum intensity (values 0…1) instead of absolute cd.
-    pub normalize: bool,
-    /// `LUMI_LUT_F32`, `LUMI_LUT_F16` or `LUMI_LUT_U8` (U8 implies normalised).
-    pub encoding: u32,
-}
-
-/// A default look-up table description: 2D, 360 × 181 (1° steps: texel i at C = 360 i / W,
-/// row j at γ = 180 j / (H − 1)), absolute cd, f32.
-#[no_mangle]
-pub extern "C" fn lumi_lut_desc_default() -> lumi_lut_desc {
-    lumi_lut_desc {
-        kind: LUMI_LUT_2D,
-        width: 360,
-        height: 181,
-        normalize: false,
-        encoding: LUMI_LUT_F32,
-    }
-}
-
 /// The renderer's id of luminaire handle `lum` (argument `arg`) of this context.
-fn luminaire_id(c: &ContextInner, lum: lumi_luminaire, arg: &str) -> Result<LuminaireId, FfiError> {
+pub(crate) fn luminaire_id(c: &ContextInner, lum: lumi_luminaire, arg: &str) -> Result<LuminaireId, FfiError> {
     handle::decode(c.tag, handle::Kind::Luminaire, lum, arg).map(LuminaireId)
 }
 
-/// The renderer's id of instance handle `instance` of this context, which must still exist.
-fn instance_id(c: &ContextInner, instance: lumi_instance) -> Result<InstanceId, FfiError> {
-    let id = handle::decode(c.tag, handle::Kind::Instance, instance, "instance").map(InstanceId)?;
-    if !c.renderer.has_instance(id) {
-        return Err(FfiError::invalid(
-            "instance",
-            format!("no instance with handle {instance:#x} (destroyed, or its luminaire was)"),
-        ));
-    }
-    Ok(id)
-}
-
-fn luminaire_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Luminaire, FfiError> {
+pub(crate) fn luminaire_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Luminaire, FfiError> {
     let id = luminaire_id(c, lum, "luminaire")?;
     c.renderer
         .luminaire(id)
@@ -248,18 +162,6 @@ pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Ph
             ),
         )
     })
-}
-
-/// The luminaire an instance draws, and the instance's handle checked.
-fn instance_luminaire(c: &ContextInner, instance: lumi_instance) -> Result<(lumi_luminaire, &Luminaire), FfiError> {
-    let (lum, _) = c.renderer.instance(instance_id(c, instance)?).map_err(|_| {
-        FfiError::invalid(
-            "instance",
-            format!("no instance with handle {instance:#x} (destroyed, or its luminaire was)"),
-        )
-    })?;
-    let lum = handle::encode(c.tag, handle::Kind::Luminaire, lum.0);
-    Ok((lum, luminaire_of(c, lum)?))
 }
 
 /// The near-field description from C, checked.
@@ -695,233 +597,6 @@ pub unsafe extern "C" fn lumi_luminaire_sample(
                 write_out(luminance_cd_m2, l);
             }
             Ok(())
-        })
-    }
-}
-
-/// Writes a host-lighting look-up table into `buffer` (row-major, row 0 = γ 0° for 2D; texel i of
-/// a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
-/// gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
-/// With `buffer` NULL only `required_bytes` is written (a size query). If `buffer_len` is too small:
-/// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field luminaire
-/// (`LUMI_LUMINAIRE_NEARFIELD`) has no table: `LUMI_STATUS_INVALID_ARGUMENT`.
-///
-/// # Safety
-/// `ctx` is a live context; `desc` valid; `buffer` NULL or `buffer_len` writable bytes;
-/// `required_bytes` writable.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_luminaire_lut(
-    ctx: *const crate::ffi::context::lumi_context,
-    luminaire: lumi_luminaire,
-    desc: *const lumi_lut_desc,
-    buffer: *mut u8,
-    buffer_len: usize,
-    required_bytes: *mut usize,
-    max_intensity_cd: *mut f64,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_luminaire_lut", ctx, |c| {
-            let Some(d) = desc.as_ref() else {
-                return Err(FfiError::null("desc"));
-            };
-            if required_bytes.is_null() {
-                return Err(FfiError::null("required_bytes"));
-            }
-            let encoding = match d.encoding {
-                LUMI_LUT_F32 => LutEncoding::F32,
-                LUMI_LUT_F16 => LutEncoding::F16,
-                LUMI_LUT_U8 => LutEncoding::U8,
-                e => return Err(FfiError::invalid("desc.encoding", format!("unknown value {e}"))),
-            };
-            if d.width < 2 || d.width > 8192 || (d.kind == LUMI_LUT_2D && (d.height < 2 || d.height > 8192)) {
-                return Err(FfiError::invalid("desc.width/height", "must be 2…8192"));
-            }
-            let p = photometry_of(c, luminaire)?;
-            let normalize = d.normalize || encoding == LutEncoding::U8;
-            let lut = match d.kind {
-                LUMI_LUT_2D => Lut::new_2d(&p.web, d.width as usize, d.height as usize, normalize)?,
-                LUMI_LUT_1D => Lut::new_1d(&p.web, d.width as usize, normalize)?,
-                k => return Err(FfiError::invalid("desc.kind", format!("unknown value {k}"))),
-            };
-            let enc = lut.encode(encoding)?;
-            let bytes: Vec<u8> = match enc.texels() {
-                LutTexels::F32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-                LutTexels::F16(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-                LutTexels::U8(v) => v.clone(),
-            };
-            if buffer.is_null() {
-                write_out(required_bytes, bytes.len());
-                return Ok(());
-            }
-            if buffer_len < bytes.len() {
-                write_out(required_bytes, bytes.len());
-                return Err(FfiError::new(
-                    LUMI_STATUS_BUFFER_TOO_SMALL,
-                    format!("buffer_len {buffer_len} < {} bytes needed", bytes.len()),
-                ));
-            }
-            std::ptr::copy_nonoverlapping(bytes.as_ptr(), buffer, bytes.len());
-            write_out(required_bytes, bytes.len());
-            if !max_intensity_cd.is_null() {
-                write_out(max_intensity_cd, lut.max_cd());
-            }
-            Ok(())
-        })
-    }
-}
-
-/// Creates an instance of a luminaire with a model matrix (luminaire frame → world, column-major
-/// `float[16]`, metres). `out` is written only on success.
-///
-/// # Safety
-/// `ctx` is a live context; `model` points to 16 floats; `out` writable.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_instance_create(
-    ctx: *mut crate::ffi::context::lumi_context,
-    luminaire: lumi_luminaire,
-    model: *const f32,
-    out: *mut lumi_instance,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_instance_create", ctx, |c| {
-            let m = mat_arg(model, "model")?;
-            if out.is_null() {
-                return Err(FfiError::null("out"));
-            }
-            luminaire_of(c, luminaire)?;
-            let lum = luminaire_id(c, luminaire, "luminaire")?;
-            let id = c.renderer.add_instance(lum, m)?;
-            write_out(out, handle::encode(c.tag, handle::Kind::Instance, id.0));
-            Ok(())
-        })
-    }
-}
-
-/// Sets an instance's model matrix (column-major `float[16]`).
-///
-/// # Safety
-/// `ctx` is a live context; `model` points to 16 floats.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_instance_set_transform(
-    ctx: *mut crate::ffi::context::lumi_context,
-    instance: lumi_instance,
-    model: *const f32,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_instance_set_transform", ctx, |c| {
-            let m = mat_arg(model, "model")?;
-            Ok(c.renderer.set_transform(instance_id(c, instance)?, m)?)
-        })
-    }
-}
-
-/// Frees an instance. Handle 0 is ignored; a stale handle is an error.
-///
-/// # Safety
-/// `ctx` is a live context.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_instance_destroy(
-    ctx: *mut crate::ffi::context::lumi_context,
-    instance: lumi_instance,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_instance_destroy", ctx, |c| {
-            if instance == 0 {
-                return Ok(());
-            }
-            Ok(c.renderer.remove_instance(instance_id(c, instance)?)?)
-        })
-    }
-}
-
-/// Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
-/// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
-/// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
-///
-/// # Safety
-/// `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_instance_illuminance(
-    ctx: *const crate::ffi::context::lumi_context,
-    instance: lumi_instance,
-    point: *const f32,
-    normal: *const f32,
-    lux: *mut f64,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_instance_illuminance", ctx, |c| {
-            if point.is_null() {
-                return Err(FfiError::null("point"));
-            }
-            if normal.is_null() {
-                return Err(FfiError::null("normal"));
-            }
-            if lux.is_null() {
-                return Err(FfiError::null("lux"));
-            }
-            if let (lum, Luminaire::Nearfield(_)) = instance_luminaire(c, instance)? {
-                return Err(FfiError::invalid(
-                    "instance",
-                    format!(
-                        "instance {instance:#x} draws near-field luminaire {lum:#x} (LUMI_LUMINAIRE_NEARFIELD), which has \
-                         no far-field photometry to compute illuminance from"
-                    ),
-                ));
-            }
-            let p = glam::Vec3::new(*point, *point.add(1), *point.add(2));
-            let n = glam::Vec3::new(*normal, *normal.add(1), *normal.add(2));
-            let e = c.renderer.illuminance(instance_id(c, instance)?, p, n)?;
-            write_out(lux, e);
-            Ok(())
-        })
-    }
-}
-
-/// Sets how an instance of a near-field luminaire draws: which capture cameras a pixel takes its
-/// luminance from, and whether it reprojects through the luminaire's proxy mesh. New instances use
-/// `LUMI_SELECTION_CONTINUOUS` with the proxy on.
-///
-/// - `selection_mode`: `LUMI_SELECTION_NEAREST`, `LUMI_SELECTION_IDW4` or
-///   `LUMI_SELECTION_CONTINUOUS`.
-/// - `use_proxy`: use the proxy mesh when the luminaire has one (`lumi_luminaire_info.has_proxy`);
-///   without one (or with false) the view ray is reprojected through the capture sphere and depth is
-///   a stand-in (docs/ffi-conventions.md, "Near-field scans").
-///
-/// Takes effect from the next `lumi_render`. Errors: `LUMI_STATUS_INVALID_ARGUMENT` for an unknown
-/// `selection_mode` (nothing changes), a stale instance, or an instance of a far-field luminaire.
-///
-/// Threading: one thread at a time per context.
-///
-/// # Safety
-/// `ctx` is a live context.
-#[no_mangle]
-pub unsafe extern "C" fn lumi_instance_set_nearfield(
-    ctx: *mut crate::ffi::context::lumi_context,
-    instance: lumi_instance,
-    selection_mode: u32,
-    use_proxy: bool,
-) -> lumi_status {
-    // SAFETY: forwarded contract.
-    unsafe {
-        with_context("lumi_instance_set_nearfield", ctx, |c| {
-            let SelectionArg(mode) = SelectionArg::try_from(selection_mode)?;
-            if let (lum, Luminaire::Farfield(_)) = instance_luminaire(c, instance)? {
-                return Err(FfiError::invalid(
-                    "instance",
-                    format!(
-                        "instance {instance:#x} draws far-field luminaire {lum:#x} (LUMI_LUMINAIRE_FARFIELD); near-field \
-                         settings apply to LUMI_LUMINAIRE_NEARFIELD luminaires"
-                    ),
-                ));
-            }
-            let id = instance_id(c, instance)?;
-            Ok(c.renderer
-                .set_nearfield_settings(id, NearfieldSettings { mode, proxy: use_proxy })?)
         })
     }
 }

@@ -15,7 +15,9 @@
 
 pub mod context;
 mod handle;
+pub mod instance;
 pub mod luminaire;
+pub mod lut;
 pub mod render;
 pub mod target;
 
