@@ -11,7 +11,9 @@
 //! - `views.rs`: [`View`], [`framed_view`], the pitch a view needs, directions on the sphere;
 //! - `render.rs`: a view's GPU render ([`render_view`]) and orthographic intensities, rendered and
 //!   ray-cast;
-//! - `evaluate.rs`: [`evaluate`]: references, then every mode rendered and measured;
+//! - `references.rs`: what every mode is compared with: the views and orthographic directions,
+//!   ray-cast;
+//! - `evaluate.rs`: [`evaluate`]: the scan loaded, its references, every mode rendered and measured;
 //! - `report.rs`: [`ModeReport`], [`LuminaireReport`], [`format_table`], [`write_triptych`];
 //! - `verdict.rs`: [`verdict`], the contract's thresholds and comparisons on a report;
 //! - [`metrics`]: the per-view metrics and their aggregates;
@@ -24,6 +26,7 @@ pub mod rays;
 mod config;
 mod evaluate;
 mod prepare;
+mod references;
 mod render;
 mod report;
 mod verdict;

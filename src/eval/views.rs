@@ -5,7 +5,7 @@
 
 use glam::{DVec2, DVec3};
 
-use super::config::LOBE_STEP;
+use super::config::{EvalConfig, LOBE_STEP};
 use super::prepare::Prepared;
 use crate::nearfield::{Camera, Intrinsics};
 
@@ -102,4 +102,98 @@ pub fn fibonacci(n: usize) -> Vec<DVec3> {
             DVec3::new(rho * a.cos(), rho * a.sin(), z)
         })
         .collect()
+}
+
+/// The views from eyes outside and inside the capture sphere ([`Prepared::eye_views`]).
+pub(super) struct EyeViews {
+    /// From every direction at every outside distance.
+    pub(super) outside: Vec<View>,
+    /// From every direction at every inside distance.
+    pub(super) inside: Vec<View>,
+    /// Inside eyes moved out of the bounding sphere, one line each (duplicates in a row dropped).
+    pub(super) notes: Vec<String>,
+}
+
+impl Prepared {
+    /// Views from every configured direction (γ, C) at each outside and inside eye distance from
+    /// `centre`, looking at `target`; an inside eye closer than the bounding sphere + 5 cm is moved out
+    /// to it (and noted).
+    pub(super) fn eye_views(&self, cfg: &EvalConfig, centre: DVec3, target: DVec3) -> EyeViews {
+        let mut notes = Vec::new();
+        let mut outside = Vec::new();
+        let mut inside = Vec::new();
+        for &(g, c) in &cfg.directions_deg {
+            let w = direction(g, c);
+            for &d in &cfg.outside_m {
+                outside.push(self.view(centre + w * d, target, cfg.max_view_px));
+            }
+            for &d in &cfg.inside_m {
+                let min = self.rb + 0.05;
+                let d2 = if d < min {
+                    notes.push(format!("inside eye at {d} m moved out to {min:.3} m"));
+                    min
+                } else {
+                    d
+                };
+                inside.push(self.view(centre + w * d2, target, cfg.max_view_px));
+            }
+        }
+        notes.dedup();
+        EyeViews { outside, inside, notes }
+    }
+
+    /// Views from up to `cfg.held_out_views` held-out capture cameras (evenly drawn from them), each
+    /// cropped about `target`; cameras facing away from the luminaire's lit side are left out.
+    pub(super) fn held_out_views(&self, cfg: &EvalConfig, target: DVec3) -> Vec<View> {
+        let n_held = cfg.held_out_views.min(self.held_out.len());
+        (0..n_held)
+            .map(|i| {
+                let (c, k) = &self.held_out[i * self.held_out.len() / n_held.max(1)];
+                // From the removed camera's pose at the views' pitch where that is finer than the
+                // captures' (a feature the captures resolve with few pixels has no interior at their
+                // pitch), cropped about the principal point like the other views.
+                let s = (self.pitch_m / self.view_pitch(c.position_m, target)).max(1.0);
+                let side = |n: u32| ((f64::from(n) * s).ceil() as u32).clamp(8, cfg.max_view_px.max(8));
+                let (w, h) = if s > 1.0 {
+                    (side(k.width), side(k.height))
+                } else {
+                    (k.width, k.height)
+                };
+                // The crop is centred on the feature's pixel, kept inside the image.
+                let full = DVec2::new(f64::from(k.width), f64::from(k.height)) * s;
+                let crop = DVec2::new(f64::from(w), f64::from(h));
+                let rel = target - c.position_m;
+                let z = rel.dot(c.forward).max(1e-9);
+                let at = k.principal_px * s + k.focal_px * s * DVec2::new(rel.dot(c.right), rel.dot(c.down)) / z;
+                let shift = (at - 0.5 * crop).clamp(DVec2::ZERO, (full - crop).max(DVec2::ZERO));
+                View {
+                    camera: c.clone(),
+                    intrinsics: Intrinsics {
+                        width: w,
+                        height: h,
+                        principal_px: k.principal_px * s - shift,
+                        focal_px: k.focal_px * s,
+                    },
+                    margin_px: margin_px(s),
+                }
+            })
+            // Held-out cameras that see nothing (the dark hemisphere) measure nothing.
+            .filter(|v| v.camera.forward.z > 0.05)
+            .collect()
+    }
+
+    /// The continuity sweep: eyes 2 m from `centre` at γ 40°, C from 10° in `cfg.sweep_step_deg`
+    /// steps over `cfg.sweep_spacings` camera spacings (at least 2 steps), looking at `target`.
+    pub(super) fn sweep_views(&self, cfg: &EvalConfig, centre: DVec3, target: DVec3) -> Vec<View> {
+        let spacing = (4.0 * std::f64::consts::PI / (2.0 * self.per_hemisphere as f64))
+            .sqrt()
+            .to_degrees();
+        let steps = ((cfg.sweep_spacings * spacing / cfg.sweep_step_deg).ceil() as usize).max(2);
+        (0..=steps)
+            .map(|k| {
+                let w = direction(40.0, 10.0 + k as f64 * cfg.sweep_step_deg);
+                self.view(centre + w * 2.0, target, cfg.max_sweep_px)
+            })
+            .collect()
+    }
 }
