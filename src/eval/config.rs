@@ -10,56 +10,59 @@ use crate::gpu::nearfield::NearfieldSettings;
 use crate::nearfield::select::SelectionMode;
 use crate::nearfield::synth;
 
-/// A rendering mode the harness compares.
+/// A rendering mode the harness compares: a camera selection, with or without the luminaire's proxy
+/// mesh. The modes follow [`SelectionMode::ALL`], so a new selection mode is compared without a change
+/// here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum EvalMode {
-    /// The reference viewer: nearest camera, no proxy.
-    Nearest,
-    /// Four-nearest inverse-distance blend, no proxy.
-    Idw4,
-    /// Continuous (barycentric) selection, no proxy.
-    Continuous,
-    /// Continuous selection with the luminaire's proxy mesh.
-    ContinuousProxy,
+pub struct EvalMode {
+    /// How cameras are chosen and weighted.
+    pub selection: SelectionMode,
+    /// Whether the luminaire's proxy mesh reprojects the captures (parallax-correct).
+    pub proxy: bool,
 }
 
 impl EvalMode {
-    /// All modes, reference first.
-    pub const ALL: [EvalMode; 4] = [
-        EvalMode::Nearest,
-        EvalMode::Idw4,
-        EvalMode::Continuous,
-        EvalMode::ContinuousProxy,
-    ];
+    /// The reference viewer: nearest camera, no proxy.
+    pub const NEAREST: EvalMode = EvalMode {
+        selection: SelectionMode::Nearest,
+        proxy: false,
+    };
 
-    /// Short label.
-    pub fn label(self) -> &'static str {
-        match self {
-            EvalMode::Nearest => SelectionMode::Nearest.name(),
-            EvalMode::Idw4 => SelectionMode::Idw4.name(),
-            EvalMode::Continuous => SelectionMode::Continuous.name(),
-            EvalMode::ContinuousProxy => "continuous+proxy",
+    /// Continuous selection with the luminaire's proxy mesh: the mode the quality contract holds.
+    pub const CONTINUOUS_PROXY: EvalMode = EvalMode {
+        selection: SelectionMode::Continuous,
+        proxy: true,
+    };
+
+    /// All modes, reference first: every selection mode without the proxy, in [`SelectionMode::ALL`]'s
+    /// order, then [`EvalMode::CONTINUOUS_PROXY`].
+    pub const ALL: [EvalMode; SelectionMode::ALL.len() + 1] = {
+        let mut all = [EvalMode::CONTINUOUS_PROXY; SelectionMode::ALL.len() + 1];
+        let mut i = 0;
+        while i < SelectionMode::ALL.len() {
+            all[i] = EvalMode {
+                selection: SelectionMode::ALL[i],
+                proxy: false,
+            };
+            i += 1;
+        }
+        all
+    };
+
+    /// Short label: the selection's [`SelectionMode::name`], with `+proxy` where the proxy is used
+    /// (`nearest`, `idw4`, `continuous`, `continuous+proxy`).
+    pub fn label(self) -> String {
+        if self.proxy {
+            format!("{}+proxy", self.selection.name())
+        } else {
+            self.selection.name().to_string()
         }
     }
 
     pub(super) fn settings(self) -> NearfieldSettings {
-        match self {
-            EvalMode::Nearest => NearfieldSettings {
-                mode: SelectionMode::Nearest,
-                proxy: false,
-            },
-            EvalMode::Idw4 => NearfieldSettings {
-                mode: SelectionMode::Idw4,
-                proxy: false,
-            },
-            EvalMode::Continuous => NearfieldSettings {
-                mode: SelectionMode::Continuous,
-                proxy: false,
-            },
-            EvalMode::ContinuousProxy => NearfieldSettings {
-                mode: SelectionMode::Continuous,
-                proxy: true,
-            },
+        NearfieldSettings {
+            mode: self.selection,
+            proxy: self.proxy,
         }
     }
 }
@@ -192,4 +195,28 @@ pub fn cameras_per_hemisphere(name: &str, base: usize) -> usize {
     let spacing = (f / 8.0).to_radians();
     let need = (2.0 * std::f64::consts::PI / (spacing * spacing)).ceil() as usize;
     base.max(need.min(28_000))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_modes_follow_the_selection_modes_then_continuous_with_the_proxy() {
+        let n = SelectionMode::ALL.len();
+        assert_eq!(EvalMode::ALL[0], EvalMode::NEAREST, "the reference first");
+        for (m, s) in EvalMode::ALL[..n].iter().zip(SelectionMode::ALL) {
+            assert_eq!(m.label(), s.name());
+            assert_eq!(m.settings(), NearfieldSettings { mode: s, proxy: false });
+        }
+        assert_eq!(EvalMode::ALL[n], EvalMode::CONTINUOUS_PROXY);
+        assert_eq!(EvalMode::CONTINUOUS_PROXY.label(), "continuous+proxy");
+        assert_eq!(
+            EvalMode::CONTINUOUS_PROXY.settings(),
+            NearfieldSettings {
+                mode: SelectionMode::Continuous,
+                proxy: true
+            }
+        );
+    }
 }

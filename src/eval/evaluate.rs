@@ -149,7 +149,7 @@ fn evaluate_mode(
     let phi_hat = flux(gpu, &refs.ortho, refs.centre, p.rb, cfg.ortho_px)?;
     let sweep = sweep(gpu, &refs.sweep)?;
     Ok(ModeReport {
-        mode: mode.label().into(),
+        mode: mode.label(),
         outside: aggregate(&m_out),
         inside: aggregate(&m_in),
         held_out: aggregate(&m_held),

@@ -30,8 +30,8 @@ pub struct Verdict {
 pub fn verdict(rep: &LuminaireReport) -> Option<Verdict> {
     let find = |label: &str| rep.modes.iter().find(|m| m.mode == label);
     let (c, n) = (
-        find(EvalMode::ContinuousProxy.label())?,
-        find(EvalMode::Nearest.label())?,
+        find(EvalMode::CONTINUOUS_PROXY.label().as_str())?,
+        find(EvalMode::NEAREST.label().as_str())?,
     );
     if rep.name == NO_THRESHOLD {
         return None;
