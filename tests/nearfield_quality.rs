@@ -21,7 +21,7 @@ fn config(tag: &str, max_capture_px: u32) -> EvalConfig {
         ortho_px: 256,
         sweep_spacings: 1.5,
         max_sweep_px: 64,
-        modes: vec![EvalMode::Nearest, EvalMode::ContinuousProxy],
+        modes: vec![EvalMode::NEAREST, EvalMode::CONTINUOUS_PROXY],
         work_dir: std::env::temp_dir().join(format!("lumiview-quality-{tag}-{}", std::process::id())),
         images_dir: None,
         ..EvalConfig::default()

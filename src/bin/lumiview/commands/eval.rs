@@ -5,6 +5,7 @@
 //! to `--images` as PNGs.
 
 use std::path::PathBuf;
+use std::sync::LazyLock;
 
 use clap::Args;
 use lumiview::eval::{evaluate, format_table, EvalConfig, EvalMode};
@@ -13,6 +14,9 @@ use lumiview::nearfield::synth::NAMES;
 
 use super::CliResult;
 
+/// Every mode's label, comma-separated: `--modes`' default.
+static ALL_MODES: LazyLock<String> = LazyLock::new(|| EvalMode::ALL.map(|m| m.label()).join(","));
+
 /// Arguments of `lumiview eval`.
 #[derive(Args, Debug)]
 pub struct EvalArgs {
@@ -20,11 +24,7 @@ pub struct EvalArgs {
     #[arg(long = "luminaire", value_delimiter = ',', value_name = "NAME")]
     pub luminaires: Vec<String>,
     /// Modes to compare: nearest, idw4, continuous, continuous+proxy (comma-separated).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "nearest,idw4,continuous,continuous+proxy"
-    )]
+    #[arg(long, value_delimiter = ',', default_value = ALL_MODES.as_str())]
     pub modes: Vec<String>,
     /// `rigo` capture cameras per hemisphere (10 % are held out).
     #[arg(long, default_value_t = 2000)]
@@ -66,7 +66,7 @@ fn parse_mode(s: &str) -> Result<EvalMode, String> {
         .into_iter()
         .find(|m| m.label() == s.trim())
         .ok_or_else(|| {
-            let names: Vec<&str> = EvalMode::ALL.iter().map(|m| m.label()).collect();
+            let names: Vec<String> = EvalMode::ALL.iter().map(|m| m.label()).collect();
             format!("--modes: unknown mode '{s}'; expected {}", names.join(", "))
         })
 }
