@@ -4,6 +4,7 @@
 //! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
 //! - [`nearfield`]: near-field scans (pure CPU).
 //! - [`files`]: reading files with limits, writing outputs through temporary files (pure CPU).
+//! - [`source`]: any luminaire file: its kind and the one dispatch to its reader (pure CPU).
 //! - [`draw`]: text with the bundled font and the GLB container, for plots, pictures and meshes
 //!   (pure CPU, a leaf).
 //! - [`gpu`]: wgpu renderer.

@@ -10,6 +10,11 @@
 //!   `LUMI_STATUS_INVALID_ARGUMENT`.
 //! - Luminaires, instances and targets are `uint64_t` handles owned by their context: a stale or
 //!   foreign handle is an error, never undefined behaviour; destroying the context frees them all.
+//!
+//! One file per C object: [`context`] (contexts, devices, logging), [`luminaire`] (loading and
+//! querying luminaires), [`lut`] (host-lighting look-up tables), [`instance`] (instances, their
+//! near-field settings and illuminance), [`target`] (render targets, export, read-back),
+//! [`render`] (the camera, render options, `lumi_render`); `handle` encodes the handles.
 
 #![allow(non_camel_case_types)]
 
