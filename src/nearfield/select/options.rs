@@ -3,7 +3,7 @@
 
 use crate::nearfield::error::{NearfieldError, Result};
 
-/// Options of [`Selection::build`].
+/// Options of [`Selection::build`](super::Selection::build).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SelectionOptions {
     /// Cameras whose directions lie within this angle (rad) of each other are one vertex. Default 10⁻⁶.

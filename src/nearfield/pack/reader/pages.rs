@@ -95,7 +95,7 @@ pub(super) struct PageCache {
 
 impl Pack {
     /// The verified bytes of page `index` (read and checked against its CRC32 the first time, then
-    /// cached within [`OpenOptions::cache_bytes`]).
+    /// cached within [`OpenOptions::cache_bytes`](super::OpenOptions::cache_bytes)).
     pub fn page_bytes(&self, index: usize) -> Result<PageBytes> {
         let sec = self
             .pages
