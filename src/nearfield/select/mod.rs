@@ -93,6 +93,20 @@
 //!   CSR tables; cell c's list is `items[offsets[c]..offsets[c + 1]]`; `offsets` has cells + 1 entries.
 //!   Triangle lists hold triangle indices, near lists vertex indices (ascending).
 //! - `n_phi`, `n_theta` (u32) and `cos_max_gap` (f32, cos of max_gap clamped to π).
+//!
+//! # Parts
+//! - this file: [`SelectionMode`] (every `match` on it), [`Selection`]: its build, candidate lists
+//!   and queries;
+//! - `options.rs`: [`SelectionOptions`], checked before a build;
+//! - `weights.rs`: [`Weights`], what a query returns;
+//! - `stats.rs`: [`SelectionStats`], the summary for reports;
+//! - `triangulation.rs`, `spherical.rs`: the vertices, the spherical Delaunay triangulation, the
+//!   geometry of spherical triangles and caps;
+//! - `grid.rs`, `tables.rs`: the cell grid and the per-cell candidate lists (CSR);
+//! - `quadratic.rs`: the quadratic stencils of the continuous mode;
+//! - `gpu.rs`: [`Selection::gpu_data`], the tables as the shader reads them;
+//! - `view.rs`: the view geometry the near-field pass culls with (content ball, view cells);
+//! - `lit_bound/`: the bounding polygon of the lit pixels (each mode's reach ρ) and its rasters.
 
 mod gpu;
 mod grid;
@@ -137,9 +151,13 @@ pub enum SelectionMode {
 }
 
 impl SelectionMode {
-    /// Every mode, in index order. Adding a mode: this enum and its three functions below, the
-    /// shader's branches on `SELECTION` (shaders/nearfield.wgsl) and the C API's `LUMI_SELECTION_*`
-    /// constant (src/ffi/luminaire.rs, checked against [`SelectionMode::index`] at compile time).
+    /// Every mode, in index order. Adding a mode: this enum and its three functions below, its
+    /// candidate lists and CPU selection in this file ([`Selection::build`], [`Selection::select`],
+    /// [`Selection::cell_candidates`], [`Selection::cameras_of_cells`]), its reach ρ in
+    /// `lit_bound/mod.rs` ([`lit_bound::LitDirections::new`]), the shader's branches on `SELECTION`
+    /// (shaders/nearfield/shade.wgsl; its `SELECTION_<NAME>` constant is generated from the enum)
+    /// and the C API's `LUMI_SELECTION_*` constant (src/ffi/luminaire.rs, checked against
+    /// [`SelectionMode::index`] at compile time).
     pub const ALL: [SelectionMode; 3] = [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous];
 
     /// The mode's one number: the near-field shader's `SELECTION` pipeline constant and the C API's

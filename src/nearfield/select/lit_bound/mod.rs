@@ -2,7 +2,7 @@
 //!
 //! Without a proxy, the fragment of view line (eye, v) finds Q, the line's first point on the capture
 //! sphere, selects cameras around Q, and samples each selected camera j at the pixel `K_j · R_j · v`
-//! (the view ray rotated into the camera; see shaders/nearfield.wgsl). So the pixel can hold light only
+//! (the view ray rotated into the camera; see shaders/nearfield/pass.wgsl). So the pixel can hold light only
 //! if, for some camera j the view can select,
 //! - v lies in D_j, the cone of directions camera j maps into the convex hull of its lit pixels
 //!   (widened by the bilinear footprint), and
