@@ -115,19 +115,19 @@ override SLOTS_PER_CHUNK: u32 = 496u;
 // (it cannot block the path from a point on it to a camera), and its pipelines leave the test out.
 override VISIBILITY: bool = true;
 
-// Continuous mode without a proxy, drawn as the triangle raster (src/nearfield/select/lit_bound.rs): each polygon
+// Continuous mode without a proxy, drawn as the triangle raster (src/nearfield/select/lit_bound/): each polygon
 // covers one selection triangle's region (vertex attribute `tri`) and the fragment takes that
 // triangle's weights directly, without the cell search.
 override TRIANGLES: bool = false;
 
-// Nearest mode without a proxy, drawn as the cell raster (src/nearfield/select/lit_bound.rs): each polygon covers
+// Nearest mode without a proxy, drawn as the cell raster (src/nearfield/select/lit_bound/): each polygon covers
 // (a little more than) one camera's Voronoi cell, `tri` naming the camera; the fragment runs the usual
 // selection and is kept only where it picks that camera, so overlapping cells write each pixel once.
 override CELLS: bool = false;
 
 // The draw is the content box: the fragment writes the stand-in depth itself (entry points fs_box*).
 // Proxy and polygon draws take the rasteriser's depth: the proxy's own, or the polygon's, which lies
-// on the stand-in plane already (src/nearfield/select/lit_bound.rs), and write no frag_depth.
+// on the stand-in plane already (src/nearfield/select/lit_bound/), and write no frag_depth.
 override BOX: bool = false;
 
 struct Cam {

@@ -61,7 +61,7 @@ fn vs_main(@location(0) pos: vec3<f32>) -> VsOut {
     return out;
 }
 
-// The frame's bounding polygons (src/nearfield/select/lit_bound.rs): a point and its selection triangle (or cell
+// The frame's bounding polygons (src/nearfield/select/lit_bound/): a point and its selection triangle (or cell
 // camera), with the records of the cameras it draws.
 @vertex
 fn vs_polygon(@location(0) pos: vec3<f32>, @location(1) tri: u32) -> VsOut {
