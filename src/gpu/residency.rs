@@ -411,7 +411,7 @@ mod tests {
     use crate::nearfield::rayset::{MemorySource, Scan};
     use crate::nearfield::synth::{synth_scan, SynthOptions};
 
-    /// The shader's `footprint()` (shaders/nearfield.wgsl), step by step, over the GPU chunks.
+    /// The shader's `footprint()` (shaders/nearfield/sampling.wgsl), step by step, over the GPU chunks.
     fn footprint(cl: &ChunkLayout, chunks: &HashMap<u32, Vec<u32>>, e: &ImageEntry, x0: i32, y0: i32) -> [f32; 4] {
         let t = cl.tile as i32;
         let word = |chunk: u32, w: usize| chunks.get(&chunk).and_then(|c| c.get(w)).copied().unwrap_or(0);

@@ -5,7 +5,7 @@
 //! Built on the CPU by median splits along the longest axis of the triangles' centroids, at most
 //! [`LEAF_TRIANGLES`] triangles per leaf; the depth is at most ⌈log₂(n / LEAF)⌉ + 1, far below the
 //! builder's limit of [`MAX_DEPTH`]. [`ProxyBvh::occluded`] is the CPU twin of the shader's traversal
-//! (shaders/nearfield.wgsl, `occluded`), used by the tests.
+//! (shaders/nearfield/visibility.wgsl, `occluded`), used by the tests.
 //!
 //! Nodes are stored in depth-first preorder, each interior node with its *escape* (the first node
 //! after its subtree), so the traversal needs no stack: on a hit go to the next node (an interior

@@ -1,5 +1,5 @@
 //! The near-field appearance pass: a scanned luminaire (`.lvpack`) drawn from the host's camera with
-//! the luminance its capture cameras measured (shaders/nearfield.wgsl says what each fragment does).
+//! the luminance its capture cameras measured (shaders/nearfield/pass.wgsl says what each fragment does).
 //!
 //! A [`NearfieldLuminaire`] holds on the GPU: the camera records, the selection tables
 //! ([`Selection`]), a chunk map and a pool of residency chunks ([`super::residency`]) within a

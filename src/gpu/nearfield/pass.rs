@@ -47,7 +47,7 @@ impl PipelineKey {
         !self.proxy && self.polygon.is_none()
     }
 
-    /// The shader's overridable constants for this pipeline (`override` in shaders/nearfield.wgsl;
+    /// The shader's overridable constants for this pipeline (`override` in shaders/nearfield/;
     /// `gpu::shaders` tests that the names are exactly the shader's).
     fn constants(&self) -> [(&'static str, f64); 14] {
         let flag = |b: bool| f64::from(u8::from(b));

@@ -1,5 +1,5 @@
 //! The near-field pass's GPU-side layout: the storage blocks (`Draw`, `Lum` in
-//! shaders/nearfield.wgsl), the pool layout given as pipeline constants, the polygon vertex layout,
+//! shaders/nearfield/pass.wgsl), the pool layout given as pipeline constants, the polygon vertex layout,
 //! and buffer helpers.
 
 use glam::DVec3;
@@ -7,7 +7,7 @@ use glam::DVec3;
 use crate::gpu::context::GpuContext;
 use crate::nearfield::select::lit_bound::PolygonVertex;
 
-/// Storage block of one luminaire (`Lum` in shaders/nearfield.wgsl, which documents the members;
+/// Storage block of one luminaire (`Lum` in shaders/nearfield/pass.wgsl, which documents the members;
 /// `gpu::shaders` tests the two layouts are one).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -21,7 +21,7 @@ pub(crate) struct LumUniform {
     pub(crate) bvh: [u32; 4],
 }
 
-/// Storage block of one draw (`Draw` in shaders/nearfield.wgsl; tested like [`LumUniform`]).
+/// Storage block of one draw (`Draw` in shaders/nearfield/pass.wgsl; tested like [`LumUniform`]).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 pub(crate) struct DrawUniform {
@@ -31,7 +31,7 @@ pub(crate) struct DrawUniform {
 }
 
 /// The pool layout the shader divides by, given as pipeline constants (`TILE_EDGE` … in
-/// shaders/nearfield.wgsl): lavapipe runs a division by a buffer value as one scalar division per lane,
+/// shaders/nearfield/pass.wgsl): lavapipe runs a division by a buffer value as one scalar division per lane,
 /// a division by a constant as a multiply and a shift.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub(super) struct PoolLayout {

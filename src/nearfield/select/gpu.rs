@@ -1,5 +1,5 @@
 //! The GPU form of a [`Selection`]: flat arrays of 4-byte little-endian words, the contract with the
-//! near-field shader (`shaders/nearfield.wgsl`). The layout is documented in the module docs of
+//! near-field shader (`shaders/nearfield/shade.wgsl`). The layout is documented in the module docs of
 //! [`super`].
 
 use super::Selection;

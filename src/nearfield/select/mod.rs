@@ -93,30 +93,49 @@
 //!   CSR tables; cell c's list is `items[offsets[c]..offsets[c + 1]]`; `offsets` has cells + 1 entries.
 //!   Triangle lists hold triangle indices, near lists vertex indices (ascending).
 //! - `n_phi`, `n_theta` (u32) and `cos_max_gap` (f32, cos of max_gap clamped to π).
+//!
+//! # Parts
+//! - this file: [`SelectionMode`] (every `match` on it), [`Selection`]: its build, candidate lists
+//!   and queries;
+//! - `options.rs`: [`SelectionOptions`], checked before a build;
+//! - `weights.rs`: [`Weights`], what a query returns;
+//! - `stats.rs`: [`SelectionStats`], the summary for reports;
+//! - `triangulation.rs`, `spherical.rs`: the vertices, the spherical Delaunay triangulation, the
+//!   geometry of spherical triangles and caps;
+//! - `grid.rs`, `tables.rs`: the cell grid and the per-cell candidate lists (CSR);
+//! - `quadratic.rs`: the quadratic stencils of the continuous mode;
+//! - `gpu.rs`: [`Selection::gpu_data`], the tables as the shader reads them;
+//! - `view.rs`: the view geometry the near-field pass culls with (content ball, view cells);
+//! - `lit_bound/`: the bounding polygon of the lit pixels (each mode's reach ρ) and its rasters.
 
 mod gpu;
 mod grid;
 pub mod lit_bound;
+mod options;
 pub mod quadratic;
 mod spherical;
+mod stats;
 mod tables;
 mod triangulation;
 pub mod view;
+mod weights;
 
 use std::collections::BTreeSet;
 use std::f64::consts::PI;
-use std::fmt;
 
 use glam::DVec3;
 
 pub use gpu::{SelectionGpu, HOLE_CAMERA, QUADRATIC_ENTRIES};
 pub use grid::{MAX_THETA_CELLS, MIN_THETA_CELLS};
+pub use options::SelectionOptions;
+pub use stats::SelectionStats;
+pub use weights::Weights;
 
 use self::grid::CellGrid;
 use self::spherical::{angle, circumcap, SphericalTriangle};
 use self::tables::{near_lists, triangle_lists, Csr};
 use self::triangulation::{spherical_delaunay, vertices};
-use crate::nearfield::error::{NearfieldError, Result};
+use crate::nearfield::error::Result;
 use crate::nearfield::rayset::RayImageSet;
 
 /// How cameras are chosen and weighted for a view direction.
@@ -132,9 +151,13 @@ pub enum SelectionMode {
 }
 
 impl SelectionMode {
-    /// Every mode, in index order. Adding a mode: this enum and its three functions below, the
-    /// shader's branches on `SELECTION` (shaders/nearfield.wgsl) and the C API's `LUMI_SELECTION_*`
-    /// constant (src/ffi/luminaire.rs, checked against [`SelectionMode::index`] at compile time).
+    /// Every mode, in index order. Adding a mode: this enum and its three functions below, its
+    /// candidate lists and CPU selection in this file ([`Selection::build`], [`Selection::select`],
+    /// [`Selection::cell_candidates`], [`Selection::cameras_of_cells`]), its reach ρ in
+    /// `lit_bound/mod.rs` ([`lit_bound::LitDirections::new`]), the shader's branches on `SELECTION`
+    /// (shaders/nearfield/shade.wgsl; its `SELECTION_<NAME>` constant is generated from the enum)
+    /// and the C API's `LUMI_SELECTION_*` constant (src/ffi/luminaire.rs, checked against
+    /// [`SelectionMode::index`] at compile time).
     pub const ALL: [SelectionMode; 3] = [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous];
 
     /// The mode's one number: the near-field shader's `SELECTION` pipeline constant and the C API's
@@ -164,178 +187,6 @@ impl SelectionMode {
     /// The mode named `name` (as [`SelectionMode::name`] spells it), if any.
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
-    }
-}
-
-/// Options of [`Selection::build`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SelectionOptions {
-    /// Cameras whose directions lie within this angle (rad) of each other are one vertex. Default 10⁻⁶.
-    pub merge_tol_rad: f64,
-    /// A triangle whose circumradius exceeds this multiple of the median is a hole; Nearest/Idw4 ignore
-    /// cameras farther than this multiple of the median circumradius. Default 4.
-    pub hole_factor: f64,
-    /// Grid cell size (degrees); `None`: half the median edge of the non-hole triangles, within 0.1…5°.
-    pub cell_deg: Option<f64>,
-}
-
-impl Default for SelectionOptions {
-    fn default() -> Self {
-        Self {
-            merge_tol_rad: 1e-6,
-            hole_factor: 4.0,
-            cell_deg: None,
-        }
-    }
-}
-
-impl SelectionOptions {
-    /// Checks the options; errors name the field.
-    pub fn validate(&self) -> Result<()> {
-        if !(self.merge_tol_rad.is_finite() && (0.0..=0.1).contains(&self.merge_tol_rad)) {
-            return Err(NearfieldError::invalid(
-                "merge_tol_rad",
-                format!("{} rad is outside 0…0.1 rad", self.merge_tol_rad),
-            ));
-        }
-        if !(self.hole_factor.is_finite() && self.hole_factor >= 1.0) {
-            return Err(NearfieldError::invalid(
-                "hole_factor",
-                format!("{} must be finite and ≥ 1", self.hole_factor),
-            ));
-        }
-        if let Some(c) = self.cell_deg {
-            if !(c.is_finite() && c > 0.0 && c <= 90.0) {
-                return Err(NearfieldError::invalid(
-                    "cell_deg",
-                    format!("{c}° must be finite and in (0, 90]"),
-                ));
-            }
-        }
-        Ok(())
-    }
-}
-
-/// Up to 4 (camera index, weight) pairs summing to 1, or none (nothing measured in that direction).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Weights {
-    len: u8,
-    pairs: [(u32, f64); 4],
-}
-
-impl Weights {
-    /// No cameras.
-    pub const EMPTY: Self = Self {
-        len: 0,
-        pairs: [(0, 0.0); 4],
-    };
-
-    /// The (camera index, weight) pairs.
-    pub fn as_slice(&self) -> &[(u32, f64)] {
-        &self.pairs[..self.len as usize]
-    }
-
-    /// Number of pairs (0…4).
-    pub fn len(&self) -> usize {
-        self.len as usize
-    }
-
-    /// Whether no camera was selected.
-    pub fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-
-    /// The pairs, in selection order (Nearest/Idw4: nearest first; Continuous: triangle order).
-    pub fn iter(&self) -> std::slice::Iter<'_, (u32, f64)> {
-        self.as_slice().iter()
-    }
-
-    /// The weight of `camera` (0 when not selected).
-    pub fn weight_of(&self, camera: u32) -> f64 {
-        self.iter().filter(|p| p.0 == camera).map(|p| p.1).sum()
-    }
-
-    fn push(&mut self, camera: u32, weight: f64) {
-        if let Some(p) = self.pairs.get_mut(self.len as usize) {
-            *p = (camera, weight);
-            self.len += 1;
-        }
-    }
-}
-
-impl<'a> IntoIterator for &'a Weights {
-    type Item = &'a (u32, f64);
-    type IntoIter = std::slice::Iter<'a, (u32, f64)>;
-    fn into_iter(self) -> Self::IntoIter {
-        self.iter()
-    }
-}
-
-/// A summary of a [`Selection`] for reports.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SelectionStats {
-    /// Cameras of the set.
-    pub cameras: usize,
-    /// Vertices (unique directions).
-    pub vertices: usize,
-    /// Coincident camera groups merged into one vertex each.
-    pub merged_groups: usize,
-    /// Triangles (2 · vertices − 4).
-    pub triangles: usize,
-    /// Hole triangles (folded ones included).
-    pub holes: usize,
-    /// Folded triangles: the camera directions do not surround the centre (see the module docs); 0 for
-    /// any scan that measured both hemispheres or one hemisphere plus an overlap.
-    pub folded: usize,
-    /// Grid columns (φ).
-    pub n_phi: u32,
-    /// Grid rows (θ).
-    pub n_theta: u32,
-    /// Mean triangles per cell.
-    pub tri_list_mean: f64,
-    /// Most triangles in a cell.
-    pub tri_list_max: usize,
-    /// Mean vertices per cell, k = 1.
-    pub near1_list_mean: f64,
-    /// Most vertices in a cell, k = 1.
-    pub near1_list_max: usize,
-    /// Mean vertices per cell, k = 4.
-    pub near4_list_mean: f64,
-    /// Most vertices in a cell, k = 4.
-    pub near4_list_max: usize,
-    /// Median edge of the non-hole triangles (degrees).
-    pub median_edge_deg: f64,
-    /// Median circumradius (degrees).
-    pub median_circumradius_deg: f64,
-    /// The gap beyond which Nearest/Idw4 find nothing (degrees).
-    pub max_gap_deg: f64,
-    /// Bytes of [`Selection::gpu_data`].
-    pub gpu_bytes: u64,
-}
-
-impl fmt::Display for SelectionStats {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "selection: {} cameras, {} vertices ({} merged groups), {} triangles, {} holes ({} folded)",
-            self.cameras, self.vertices, self.merged_groups, self.triangles, self.holes, self.folded
-        )?;
-        writeln!(
-            f,
-            "  grid {} × {} cells; median edge {:.3}°, median circumradius {:.3}°, max gap {:.3}°",
-            self.n_phi, self.n_theta, self.median_edge_deg, self.median_circumradius_deg, self.max_gap_deg
-        )?;
-        write!(
-            f,
-            "  lists mean/max: triangles {:.2}/{}, nearest {:.2}/{}, 4-nearest {:.2}/{}; GPU {:.1} MiB",
-            self.tri_list_mean,
-            self.tri_list_max,
-            self.near1_list_mean,
-            self.near1_list_max,
-            self.near4_list_mean,
-            self.near4_list_max,
-            self.gpu_bytes as f64 / f64::from(1u32 << 20)
-        )
     }
 }
 
@@ -659,33 +510,6 @@ impl Selection {
     pub fn max_gap_rad(&self) -> f64 {
         self.max_gap
     }
-
-    /// A summary for reports.
-    pub fn stats(&self) -> SelectionStats {
-        let (tm, tx) = self.tri_cells.len_stats();
-        let (n1m, n1x) = self.near1.len_stats();
-        let (n4m, n4x) = self.near4.len_stats();
-        SelectionStats {
-            cameras: self.cameras,
-            vertices: self.dirs.len(),
-            merged_groups: self.merged_groups,
-            triangles: self.tris.len(),
-            holes: self.hole.iter().filter(|h| **h).count(),
-            folded: self.folded.iter().filter(|f| **f).count(),
-            n_phi: self.grid.n_phi,
-            n_theta: self.grid.n_theta,
-            tri_list_mean: tm,
-            tri_list_max: tx,
-            near1_list_mean: n1m,
-            near1_list_max: n1x,
-            near4_list_mean: n4m,
-            near4_list_max: n4x,
-            median_edge_deg: self.median_edge.to_degrees(),
-            median_circumradius_deg: self.median_circumradius.to_degrees(),
-            max_gap_deg: self.max_gap.to_degrees(),
-            gpu_bytes: self.gpu_bytes(),
-        }
-    }
 }
 
 /// `u` normalised, or `None` when zero or not finite.
@@ -713,7 +537,7 @@ mod tests {
     use crate::nearfield::rayset::{CaptureSphere, Intrinsics};
     use glam::DVec2;
 
-    fn set(layout: Layout) -> RayImageSet {
+    pub(super) fn set(layout: Layout) -> RayImageSet {
         let sphere = CaptureSphere {
             centre_m: DVec3::new(0.1, -0.2, 0.3),
             radius_m: 2.0,
@@ -727,39 +551,6 @@ mod tests {
                 focal_px: DVec2::splat(8.0),
             },
             cameras: cameras(&sphere, &layout, 1).unwrap(),
-        }
-    }
-
-    #[test]
-    fn options_are_validated_by_name() {
-        let s = set(Layout::Fibonacci { count: 50 });
-        for (opts, name) in [
-            (
-                SelectionOptions {
-                    merge_tol_rad: f64::NAN,
-                    ..Default::default()
-                },
-                "merge_tol_rad",
-            ),
-            (
-                SelectionOptions {
-                    hole_factor: 0.5,
-                    ..Default::default()
-                },
-                "hole_factor",
-            ),
-            (
-                SelectionOptions {
-                    cell_deg: Some(0.0),
-                    ..Default::default()
-                },
-                "cell_deg",
-            ),
-        ] {
-            match Selection::build(&s, &opts) {
-                Err(NearfieldError::InvalidArgument { name: n, .. }) => assert_eq!(n, name),
-                other => panic!("{other:?}"),
-            }
         }
     }
 
@@ -801,18 +592,5 @@ mod tests {
         assert!(sel
             .cameras_of_cells(SelectionMode::Continuous, [usize::MAX].into_iter())
             .is_empty());
-    }
-
-    #[test]
-    fn weights_accessors() {
-        let mut w = Weights::EMPTY;
-        assert!(w.is_empty());
-        for k in 0..6 {
-            w.push(k, 0.25);
-        }
-        assert_eq!(w.len(), 4);
-        assert_eq!(w.weight_of(3), 0.25);
-        assert_eq!(w.weight_of(5), 0.0);
-        assert_eq!((&w).into_iter().count(), 4);
     }
 }
