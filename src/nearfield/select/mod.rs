@@ -151,13 +151,13 @@ pub enum SelectionMode {
 }
 
 impl SelectionMode {
-    /// Every mode, in index order. Adding a mode: this enum and its three functions below, its
-    /// candidate lists and CPU selection in this file ([`Selection::build`], [`Selection::select`],
-    /// [`Selection::cell_candidates`], [`Selection::cameras_of_cells`]), its reach ρ in
-    /// `lit_bound/mod.rs` ([`lit_bound::LitDirections::new`]), the shader's branches on `SELECTION`
-    /// (shaders/nearfield/shade.wgsl; its `SELECTION_<NAME>` constant is generated from the enum)
-    /// and the C API's `LUMI_SELECTION_*` constant (src/ffi/luminaire.rs, checked against
-    /// [`SelectionMode::index`] at compile time).
+    /// Every mode, in index order. Adding a mode touches three files: this one (the enum, its
+    /// functions below — index, name, [`SelectionMode::reach`], [`SelectionMode::blends_triangles`]
+    /// — and its candidate lists and CPU selection: [`Selection::build`], [`Selection::select`],
+    /// [`Selection::cell_candidates`], [`Selection::cameras_of_cells`]), the shader's branches on
+    /// `SELECTION` (shaders/nearfield/shade.wgsl; its `SELECTION_<NAME>` constant is generated from
+    /// the enum) and the C API's `LUMI_SELECTION_*` constant (src/ffi/instance.rs, checked against
+    /// [`SelectionMode::index`] at compile time). The evaluation's modes follow [`Self::ALL`].
     pub const ALL: [SelectionMode; 3] = [SelectionMode::Nearest, SelectionMode::Idw4, SelectionMode::Continuous];
 
     /// The mode's one number: the near-field shader's `SELECTION` pipeline constant and the C API's
@@ -188,6 +188,38 @@ impl SelectionMode {
     pub fn from_name(name: &str) -> Option<Self> {
         Self::ALL.into_iter().find(|m| m.name() == name)
     }
+
+    /// ρ_j, the farthest (great-circle angle, rad) a direction that selects camera j in this mode
+    /// can lie from j's vertex, from j's geometry (the bounding polygon of the lit pixels,
+    /// [`lit_bound`], draws only where a selectable camera can be selected): nearest: the largest
+    /// circumradius around j, which bounds j's Voronoi cell; idw4: the selection's max gap;
+    /// continuous: j's longest edge to a neighbour in a non-hole triangle (a point of a triangle is
+    /// nearest its farthest vertex at a vertex).
+    pub const fn reach(self, r: &Reach) -> f64 {
+        match self {
+            SelectionMode::Nearest => r.circumradius,
+            SelectionMode::Idw4 => r.max_gap,
+            SelectionMode::Continuous => r.longest_edge,
+        }
+    }
+
+    /// The mode blends over Delaunay triangles (the bounding polygon then needs the triangles whose
+    /// three cameras are all selectable), rather than over cameras of a cell.
+    pub const fn blends_triangles(self) -> bool {
+        matches!(self, SelectionMode::Continuous)
+    }
+}
+
+/// A camera's geometric reaches on the sphere of directions (rad), from which each mode's ρ
+/// ([`SelectionMode::reach`]) is taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// The largest circumradius of the triangles around the camera's vertex, at most `max_gap`.
+    pub circumradius: f64,
+    /// The selection's largest gap between cameras.
+    pub max_gap: f64,
+    /// The longest edge from the camera's vertex in a non-hole triangle.
+    pub longest_edge: f64,
 }
 
 /// The selection tables of a scan: triangulation, holes, cell grid and per-cell candidate lists.

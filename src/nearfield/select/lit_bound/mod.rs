@@ -39,7 +39,7 @@ use rayon::prelude::*;
 
 use self::polygon::{clip_convex, convex_hull};
 use super::view::orthonormal;
-use super::{Selection, SelectionMode};
+use super::{Reach, Selection, SelectionMode};
 use crate::nearfield::pack::{Pack, EMPTY_TILE};
 use crate::nearfield::{NearfieldError, RayImageSet};
 
@@ -118,6 +118,11 @@ impl LitDirections {
             }
         }
         // In parallel: the tile tables of a full-size scan hold hundreds of millions of entries.
+        let reach = |v: usize| Reach {
+            circumradius: circ[v],
+            max_gap,
+            longest_edge: edge[v],
+        };
         let cameras = (0..set.cameras.len().min(pack.images().len()))
             .into_par_iter()
             .map(|i| {
@@ -206,14 +211,15 @@ impl LitDirections {
                 Ok(Some(CameraCone {
                     corners: hull.iter().map(|h| dir(f64::from(h.0), f64::from(h.1))).collect(),
                     vertex: dirs[v],
-                    rho: [grow(circ[v]), grow(max_gap), grow(edge[v])],
+                    rho: SelectionMode::ALL.map(|m| grow(m.reach(&reach(v)))),
                     cell: cells[v].clone().filter(|c| c.len() >= 3),
                 }))
             })
             .collect::<Result<Vec<_>, NearfieldError>>()?;
         let vertex_rho = (0..dirs.len())
             .map(|v| {
-                [circ[v], max_gap, edge[v]].map(|r| {
+                SelectionMode::ALL.map(|m| {
+                    let r = m.reach(&reach(v));
                     let r = r * 1.01 + 1e-6;
                     (r, r.cos(), r.sin())
                 })
@@ -394,7 +400,7 @@ impl LitDirections {
             .collect();
         cams.sort_unstable();
         cams.dedup();
-        let tris = if mode == SelectionMode::Continuous {
+        let tris = if mode.blends_triangles() {
             (0..sel.triangles().len() as u32)
                 .filter(|&t| sel.triangles()[t as usize].iter().all(|&v| ok[v as usize]))
                 .collect()
