@@ -113,7 +113,13 @@ impl HostCamera {
     /// so the sign is robust at any distance. Orthographic: depth grows away from the eye along
     /// r_z (unless `reversed_z`), so the winding is reversed where det[r_x; r_y; r_z] > 0.
     pub fn mirrors_winding(&self, model: Mat4) -> bool {
-        let c = (self.clip_from_world() * model).as_dmat4();
+        self.mirrors_winding_of(model, self.clip_from_world() * model)
+    }
+
+    /// [`HostCamera::mirrors_winding`] for a draw whose clip-from-local matrix
+    /// (`clip_from_world() · model`) the caller has already computed.
+    pub fn mirrors_winding_of(&self, model: Mat4, clip_from_local: Mat4) -> bool {
+        let c = clip_from_local.as_dmat4();
         let row = |i: usize| glam::DVec3::new(c.x_axis[i], c.y_axis[i], c.z_axis[i]);
         let (rx, ry, rz) = (row(0), row(1), row(2));
         let n = rx.cross(ry);

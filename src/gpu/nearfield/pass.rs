@@ -132,7 +132,7 @@ impl NearfieldPass {
     pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
         ctx.scoped("creating the near-field pass", || {
             let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("nearfield.wgsl"),
+                label: Some("shaders/nearfield/"),
                 source: wgpu::ShaderSource::Wgsl(crate::gpu::shaders::nearfield().into()),
             });
             let draw_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -315,7 +315,7 @@ impl Pass for NearfieldPass {
                 // faces, from inside its back faces, swapped when the host's camera (a y-flipping
                 // BottomLeft origin) or the model mirrors the winding.
                 (false, None, outside) => {
-                    let front = outside != camera.mirrors_winding(*model);
+                    let front = outside != camera.mirrors_winding_of(*model, clip_from_local);
                     let cull = if front { wgpu::Face::Back } else { wgpu::Face::Front };
                     (DrawGeometry::Box, Some(cull))
                 }
