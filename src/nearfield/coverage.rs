@@ -19,7 +19,9 @@ use tiny_skia::{Color, FillRule, Paint, PathBuilder, Pixmap, Rect, Stroke, Strok
 
 use super::error::{NearfieldError, Result};
 use super::rayset::{Hemisphere, RayImageSet};
+use crate::draw::colormap::VIRIDIS;
 use crate::draw::text::{Anchor, Typeface, FONT_PATH};
+use crate::draw::ticks::{label_at_step, step_at_least};
 
 /// Uniformly spread directions (a Fibonacci sphere) over which the gap statistics are taken.
 pub const STATS_SAMPLES: usize = 1 << 18;
@@ -595,7 +597,7 @@ impl Coverage {
         let values = self.angle_map(mw, mh);
         let vmax_data = values.iter().copied().filter(|v| v.is_finite()).fold(0.0f32, f32::max);
         let vmax_data = f64::from(vmax_data).max(self.stats.max_gap_deg).max(1e-6);
-        let step = nice_step(vmax_data / 5.0);
+        let step = step_at_least(vmax_data / 5.0);
         let vmax = (vmax_data / step).ceil() * step;
         // Pixels straight into the (opaque) pixmap.
         let (pw, ph) = (pm.width() as usize, pm.height() as usize);
@@ -608,7 +610,7 @@ impl Coverage {
                 }
                 let v = values[r * mw + c];
                 let rgb = if v.is_finite() {
-                    viridis(f64::from(v) / vmax)
+                    VIRIDIS.at(f64::from(v) / vmax)
                 } else {
                     [200, 200, 200]
                 };
@@ -737,7 +739,7 @@ impl Coverage {
         let bw = mw;
         let data = pm.data_mut();
         for c in 0..bw {
-            let rgb = viridis((c as f64 + 0.5) / bw as f64);
+            let rgb = VIRIDIS.at((c as f64 + 0.5) / bw as f64);
             for r in 0..bh as usize {
                 let (x, y) = (x0 as usize + c, by as usize + r);
                 if x < pw && y < ph {
@@ -751,7 +753,15 @@ impl Coverage {
             let v = k as f64 * step;
             let x = x0 + mwf * v / vmax;
             line(pm, [x, by + bh], [x, by + bh + 4.0 * s], &grid, [60, 60, 60, 255]);
-            face.text(pm, &fmt_tick(v, step), x, by + bh + 17.0 * s, size, ink, Anchor::Middle);
+            face.text(
+                pm,
+                &label_at_step(v, step),
+                x,
+                by + bh + 17.0 * s,
+                size,
+                ink,
+                Anchor::Middle,
+            );
         }
         face.text(
             pm,
@@ -812,56 +822,6 @@ fn refine_gap(index: &CameraIndex, dirs: &[DVec3], q0: DVec3) -> (f64, DVec3) {
 
 /// Colours of the lower and upper hemisphere's cameras.
 const HEMI_COLOURS: [[u8; 4]; 2] = [[31, 119, 180, 255], [230, 97, 1, 255]];
-
-/// The viridis colour map (9 samples, linear in between) at `t` in 0…1.
-fn viridis(t: f64) -> [u8; 3] {
-    const STOPS: [[f64; 3]; 9] = [
-        [68.0, 1.0, 84.0],
-        [71.0, 44.0, 122.0],
-        [59.0, 81.0, 139.0],
-        [44.0, 113.0, 142.0],
-        [33.0, 144.0, 141.0],
-        [39.0, 173.0, 129.0],
-        [92.0, 200.0, 99.0],
-        [170.0, 220.0, 50.0],
-        [253.0, 231.0, 37.0],
-    ];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
-    let x = t * 8.0;
-    let i = (x.floor() as usize).min(7);
-    let f = x - i as f64;
-    let mut out = [0u8; 3];
-    for (k, o) in out.iter_mut().enumerate() {
-        *o = (STOPS[i][k] + (STOPS[i + 1][k] - STOPS[i][k]) * f)
-            .round()
-            .clamp(0.0, 255.0) as u8;
-    }
-    out
-}
-
-/// The smallest 1-2-5 × 10ⁿ step ≥ `x`.
-fn nice_step(x: f64) -> f64 {
-    if !(x.is_finite() && x > 0.0) {
-        return 1.0;
-    }
-    let p = 10f64.powf(x.log10().floor());
-    for m in [1.0, 2.0, 5.0, 10.0] {
-        if m * p >= x * (1.0 - 1e-12) {
-            return m * p;
-        }
-    }
-    10.0 * p
-}
-
-/// A tick label with as many decimals as the step needs.
-fn fmt_tick(v: f64, step: f64) -> String {
-    let decimals = if step >= 1.0 {
-        0
-    } else {
-        (-step.log10().floor()) as usize
-    };
-    format!("{v:.decimals$}")
-}
 
 /// A number without needless digits (for the title).
 fn fmt_g(v: f64) -> String {
@@ -948,13 +908,5 @@ mod tests {
         let png = cov.to_png(800).unwrap();
         assert_eq!(&png[1..4], b"PNG");
         assert!(cov.to_png(100).is_err());
-    }
-
-    #[test]
-    fn nice_steps() {
-        assert_eq!(nice_step(0.3), 0.5);
-        assert_eq!(nice_step(1.0), 1.0);
-        assert_eq!(nice_step(12.0), 20.0);
-        assert_eq!(fmt_tick(0.25, 0.05), "0.25");
     }
 }

@@ -25,6 +25,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::draw::text::Typeface;
+use crate::draw::ticks::{label_at_step, step_and_count, trim_number};
 use tiny_skia::Pixmap;
 
 use self::layout::{
@@ -443,18 +444,13 @@ impl PolarPlot {
             let left = c.gamma_deg.iter().zip(&c.left).rev().map(at(false));
             c.points = right.chain(left).collect();
         }
-        let decimals = if step >= 1.0 {
-            0
-        } else {
-            (-step.log10() - 1e-9).ceil() as usize
-        };
         let rings: Vec<Ring> = (1..=count)
             .map(|i| {
                 let value = step * i as f64;
                 Ring {
                     value,
                     radius: lay.radius * value / outer_value,
-                    label: format!("{value:.decimals$}"),
+                    label: label_at_step(value, step),
                 }
             })
             .collect();
@@ -657,18 +653,7 @@ fn sample_curves(p: &Photometry, cd_to_unit: f64, line: f64) -> Vec<PlaneCurve> 
 
 /// The ring step (1-2-5 series) and ring count (at most [`MAX_RINGS`]) for a maximum value.
 fn ring_step(max: f64) -> (f64, usize) {
-    if !(max.is_finite() && max > 0.0) {
-        return (1.0, 5);
-    }
-    let magnitude = 10f64.powf((max / MAX_RINGS as f64).log10().floor());
-    for m in [1.0, 2.0, 5.0, 10.0, 20.0, 50.0] {
-        let step = m * magnitude;
-        let count = (max / step - 1e-9).ceil().max(1.0) as usize;
-        if count <= MAX_RINGS {
-            return (step, count);
-        }
-    }
-    (100.0 * magnitude, 1)
+    step_and_count(max, MAX_RINGS).unwrap_or((1.0, 5))
 }
 
 /// First non-empty label among `keys` (case-insensitive), whitespace collapsed to single spaces.
@@ -768,19 +753,6 @@ fn fmt_value(v: f64) -> String {
 /// An angle with at most two decimals, trailing zeros dropped.
 fn fmt_angle(a: f64) -> String {
     trim_number(format!("{a:.2}"))
-}
-
-/// Drops trailing zeros (and a trailing point) of a formatted decimal; `-0` becomes `0`.
-fn trim_number(s: String) -> String {
-    if !s.contains('.') {
-        return s;
-    }
-    let t = s.trim_end_matches('0').trim_end_matches('.');
-    if t == "-0" {
-        "0".to_string()
-    } else {
-        t.to_string()
-    }
 }
 
 #[cfg(test)]

@@ -24,10 +24,11 @@ use std::path::Path;
 
 use super::layout::Bounds;
 use super::{
-    file_name, label, raster, svg, title_of, trim_number, typeface, wrap_parts, LineStyle, PlotError, PlotFormat,
-    RasterImage, Rgba, Scene, Shape, TextAnchor, Typeface, CAP_HEIGHT, GREY_TEXT, INK, MAX_SIZE_PX, MIN_SIZE_PX, RED,
-    SEP, WHITE,
+    file_name, label, raster, svg, title_of, typeface, wrap_parts, LineStyle, PlotError, PlotFormat, RasterImage, Rgba,
+    Scene, Shape, TextAnchor, Typeface, CAP_HEIGHT, GREY_TEXT, INK, MAX_SIZE_PX, MIN_SIZE_PX, RED, SEP, WHITE,
 };
+use crate::draw::colormap::YELLOW_ORANGE_BROWN;
+use crate::draw::ticks::{label_trimmed, step_for_span, symmetric_ticks, trim_number};
 use crate::photometry::isolux::{IsoluxContour, IsoluxGrid, MaxPoint};
 use crate::photometry::luminaire::Photometry;
 use tiny_skia::Pixmap;
@@ -98,17 +99,6 @@ pub struct IsoluxPlot {
 /// more.
 const MAX_TICK_INTERVALS: f64 = 10.0;
 
-/// Colour stops of the fill, lowest band first (a light yellow-orange-brown ramp, so the dark
-/// lines and their white labels stay readable on every band).
-const FILL_STOPS: [[u8; 3]; 6] = [
-    [255, 250, 210],
-    [254, 232, 150],
-    [254, 203, 95],
-    [253, 163, 64],
-    [238, 118, 42],
-    [205, 82, 28],
-];
-
 /// Sizes and positions of the page for an image `width` pixels wide (scaled like the polar
 /// diagram: strokes with the width, text never below 75 % of its 800 px size).
 struct Page {
@@ -153,8 +143,8 @@ impl IsoluxPlot {
         }
         let face = typeface()?;
         let half_width_m = grid.half_width_m();
-        let tick_step_m = tick_step(2.0 * half_width_m);
-        let ticks = tick_values(half_width_m, tick_step_m);
+        let tick_step_m = step_for_span(2.0 * half_width_m, MAX_TICK_INTERVALS);
+        let ticks = symmetric_ticks(half_width_m, tick_step_m);
         let page = Page::new(f64::from(opts.size_px), opts.fill, &face, &ticks, &levels_lx);
         let contours = grid.contours(&levels_lx);
         let to_px = Mapping {
@@ -347,7 +337,7 @@ impl Page {
         let top = (axis_title_baseline + 10.0 * t).round();
         let tick_w = ticks
             .iter()
-            .map(|&v| face.width(&fmt_tick(v), tick_size))
+            .map(|&v| face.width(&label_trimmed(v), tick_size))
             .fold(0.0, f64::max);
         let left = (margin + tick_w + 8.0 * t).round();
         let (right, bar_block) = if fill {
@@ -412,38 +402,6 @@ impl Page {
 /// The colour bar's title.
 const BAR_HEADER: &str = "E in lx";
 
-/// The smallest 1-2-5 step (metres) that divides `span_m` into at most [`MAX_TICK_INTERVALS`].
-fn tick_step(span_m: f64) -> f64 {
-    if !(span_m.is_finite() && span_m > 0.0) {
-        return 1.0;
-    }
-    let mut exponent = (span_m / MAX_TICK_INTERVALS).log10().floor() as i32;
-    loop {
-        for m in [1.0, 2.0, 5.0] {
-            let step = if exponent >= 0 {
-                m * 10f64.powi(exponent)
-            } else {
-                m / 10f64.powi(-exponent)
-            };
-            if span_m / step <= MAX_TICK_INTERVALS + 1e-9 {
-                return step;
-            }
-        }
-        exponent += 1;
-    }
-}
-
-/// Tick positions k · step within ±half_width_m, metres.
-fn tick_values(half_width_m: f64, step_m: f64) -> Vec<f64> {
-    let k = (half_width_m / step_m + 1e-9).floor() as i64;
-    (-k..=k).map(|i| i as f64 * step_m).collect()
-}
-
-/// A tick label: metres, at most three decimals, a typographic minus.
-fn fmt_tick(v: f64) -> String {
-    trim_number(format!("{v:.3}")).replace('-', "\u{2212}")
-}
-
 /// A length for the title and caption: at most three decimals.
 fn fmt_metres(v: f64) -> String {
     trim_number(format!("{v:.3}"))
@@ -474,20 +432,12 @@ fn contour_style(page: &Page, level: f64) -> LineStyle {
     page.stroke(if major { 2.1 } else { 1.3 }, Rgba::grey(25))
 }
 
-/// The colour of band `i` of `n` (band 0 lies between the two lowest levels).
+/// The colour of band `i` of `n` (band 0 lies between the two lowest levels): the fill's colour map
+/// ([`YELLOW_ORANGE_BROWN`]: light, so the dark lines and their white labels stay readable on every
+/// band) spread over the bands.
 fn band_colour(i: usize, n: usize) -> Rgba {
-    let pos = if n <= 1 {
-        0.0
-    } else {
-        i as f64 / (n - 1) as f64 * (FILL_STOPS.len() - 1) as f64
-    };
-    let k = (pos.floor() as usize).min(FILL_STOPS.len() - 2);
-    let f = pos - k as f64;
-    let mix = |c: usize| {
-        let (a, b) = (f64::from(FILL_STOPS[k][c]), f64::from(FILL_STOPS[k + 1][c]));
-        (a + (b - a) * f).round().clamp(0.0, 255.0) as u8
-    };
-    Rgba([mix(0), mix(1), mix(2), 255])
+    let [r, g, b] = YELLOW_ORANGE_BROWN.class(i, n);
+    Rgba([r, g, b, 255])
 }
 
 /// The false-colour fill of the square, one image pixel per page pixel: E interpolated bilinearly
@@ -571,7 +521,7 @@ fn draw_axes(scene: &mut Scene, page: &Page, face: &Typeface, to_px: &Mapping, t
                 stroke: frame.clone(),
             },
         );
-        let label = fmt_tick(v);
+        let label = label_trimmed(v);
         let base = page.x_tick_baseline();
         scene.text(
             "axes",
@@ -953,8 +903,8 @@ fn draw_legend(
         format!(
             "Max. E {} lx at x = {} m, y = {} m",
             fmt_lux(max.e_lx),
-            fmt_tick(max.x_m),
-            fmt_tick(max.y_m)
+            label_trimmed(max.x_m),
+            label_trimmed(max.y_m)
         ),
     ];
     let mut y = first;
@@ -1002,27 +952,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tick_steps_follow_1_2_5() {
-        assert_eq!(tick_step(6.0), 1.0);
-        assert_eq!(tick_step(10.0), 1.0);
-        assert_eq!(tick_step(10.2), 2.0);
-        assert_eq!(tick_step(30.0), 5.0);
-        assert_eq!(tick_step(0.6), 0.1);
-        assert_eq!(tick_values(3.0, 1.0), [-3.0, -2.0, -1.0, 0.0, 1.0, 2.0, 3.0]);
-        assert_eq!(tick_values(10.2, 2.0).len(), 11);
-    }
-
-    #[test]
     fn labels_and_colours() {
-        assert_eq!(fmt_tick(-2.0), "\u{2212}2");
-        assert_eq!(fmt_tick(0.5), "0.5");
         assert_eq!(fmt_level(0.05), "0.05");
         assert_eq!(fmt_level(200.0), "200");
         assert_eq!(fmt_lux(292.01), "292");
         assert_eq!(fmt_lux(0.01234), "0.0123");
-        assert_eq!(band_colour(0, 6).0[..3], FILL_STOPS[0]);
-        assert_eq!(band_colour(5, 6).0[..3], FILL_STOPS[5]);
-        assert_eq!(band_colour(0, 1).0[..3], FILL_STOPS[0]);
+        let stops = YELLOW_ORANGE_BROWN.stops();
+        assert_eq!(band_colour(0, 6).0[..3], stops[0]);
+        assert_eq!(band_colour(5, 6).0[..3], stops[5]);
+        assert_eq!(band_colour(0, 1).0[..3], stops[0]);
     }
 
     #[test]
