@@ -23,10 +23,12 @@
 use std::path::Path;
 
 use super::layout::Bounds;
+use super::scene::{LineStyle, RasterImage, Rgba, Scene, Shape, TextAnchor, GREY_TEXT, INK, RED, WHITE};
 use super::{
-    file_name, label, raster, svg, title_of, typeface, wrap_parts, LineStyle, PlotError, PlotFormat, RasterImage, Rgba,
-    Scene, Shape, TextAnchor, Typeface, CAP_HEIGHT, GREY_TEXT, INK, MAX_SIZE_PX, MIN_SIZE_PX, RED, SEP, WHITE,
+    file_name, label, raster, svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, CAP_HEIGHT, MAX_SIZE_PX,
+    MIN_SIZE_PX, SEP,
 };
+use crate::draw::text::Typeface;
 use crate::draw::colormap::YELLOW_ORANGE_BROWN;
 use crate::draw::ticks::{label_trimmed, step_for_span, symmetric_ticks, trim_number};
 use crate::photometry::isolux::{IsoluxContour, IsoluxGrid, MaxPoint};

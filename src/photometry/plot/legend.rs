@@ -4,7 +4,8 @@
 
 use tiny_skia::Pixmap;
 
-use super::{raster, typeface, LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor};
+use super::{raster, typeface, PlotError};
 use crate::draw::ticks::{label_short, log_ticks};
 
 /// A logarithmic scale bar.

@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::{LineStyle, Rgba, Scene, Shape, TextAnchor};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor};
 use crate::draw::ticks::trim_number;
 
 /// Font family written into the SVG; DejaVu Sans first so the metrics match the layout.
