@@ -5,7 +5,7 @@
 //!
 //! - `polar.rs`: the polar intensity diagram ([`PolarPlot`]) and its writers.
 //! - `layout.rs`: the polar diagram's page layout and the primitives that draw it.
-//! - `isolux.rs`: the isolux diagram of illuminance on a floor plane ([`IsoluxPlot`]).
+//! - `isolux/`: the isolux diagram of illuminance on a floor plane ([`IsoluxPlot`]).
 //! - [`legend`]: a labelled logarithmic scale bar to put under an image ([`legend::ScaleBar`]).
 //! - `scene.rs`: the drawing primitives (colours, line styles, text, shapes, images) and the scene.
 //! - `svg.rs`: the scene as an SVG document.
