@@ -2,10 +2,11 @@
 //! and the primitives that draw them. Every label is measured with the bundled font so nothing
 //! overlaps; the ring labels go beside the axis the curves cross least.
 
-use super::{
-    file_name, label, LineStyle, Photometry, PlaneCurve, PlotUnit, Rgba, Ring, Scene, Shape, TextAnchor, Typeface,
-    CAP_HEIGHT, GREY_TEXT, INK, SEP, WHITE,
-};
+use super::polar::{PlaneCurve, PlotUnit, Ring};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor, GREY_TEXT, INK, WHITE};
+use super::{file_name, label, CAP_HEIGHT, SEP};
+use crate::draw::text::Typeface;
+use crate::photometry::luminaire::Photometry;
 
 /// An axis-aligned box, pixels.
 #[derive(Debug, Clone, Copy)]

@@ -1,10 +1,12 @@
 //! A labelled scale bar: what each colour of an image means, on a logarithmic axis with ticks at
-//! 1-2-5 values, as a strip to put under the image (a render's luminance in cd/m², say). The
+//! 1-2-5 values ([`log_ticks`]), as a strip to put under the image (a render's luminance in cd/m², say). The
 //! caller maps a value to its colour, so the bar shows exactly the image's own mapping.
 
 use tiny_skia::Pixmap;
 
-use super::{raster, typeface, LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor};
+use super::{raster, typeface, PlotError};
+use crate::draw::ticks::{label_short, log_ticks};
 
 /// A logarithmic scale bar.
 pub struct ScaleBar<'a> {
@@ -18,50 +20,6 @@ pub struct ScaleBar<'a> {
     pub caption: String,
     /// The colour of a value, sRGB 8-bit.
     pub colour_of: &'a dyn Fn(f64) -> [u8; 3],
-}
-
-/// A tick value as printed: 1, 20, 500, 5k, 2M, 1e9 …
-fn tick_label(v: f64) -> String {
-    if v >= 1e9 {
-        let e = v.log10().floor();
-        let m = (v / 10f64.powf(e)).round();
-        return format!("{m}e{e}");
-    }
-    let (d, suffix) = if v >= 1e6 {
-        (v / 1e6, "M")
-    } else if v >= 1e3 {
-        (v / 1e3, "k")
-    } else {
-        (v, "")
-    };
-    if d >= 1.0 || d == 0.0 {
-        format!("{}{suffix}", (d * 1000.0).round() / 1000.0)
-    } else {
-        let digits = (-d.log10()).ceil() as usize;
-        format!("{d:.digits$}{suffix}")
-    }
-}
-
-/// The 1-2-5 values within [lo, hi], thinned to at most `max_ticks` (keeping the decades).
-fn ticks(lo: f64, hi: f64, max_ticks: usize) -> Vec<f64> {
-    let mut v = Vec::new();
-    let mut e = lo.log10().floor() as i32;
-    while 10f64.powi(e) <= hi * 1.000001 && v.len() < 1000 {
-        for m in [1.0, 2.0, 5.0] {
-            let t = m * 10f64.powi(e);
-            if t >= lo * 0.999999 && t <= hi * 1.000001 {
-                v.push(t);
-            }
-        }
-        e += 1;
-    }
-    if v.len() > max_ticks {
-        v.retain(|t| {
-            let m = t / 10f64.powi(t.log10().floor() as i32);
-            (m - 1.0).abs() < 1e-6
-        });
-    }
-    v
 }
 
 impl ScaleBar<'_> {
@@ -121,7 +79,7 @@ impl ScaleBar<'_> {
         let label_w = face.width("500k", text);
         let max_ticks = ((x1 - x0) / (1.6 * label_w)).floor().max(2.0) as usize;
         let baseline = bar_top + bar_h + 0.5 * text + text;
-        for t in ticks(self.min, self.max, max_ticks) {
+        for t in log_ticks(self.min, self.max, max_ticks) {
             let x = x_of(t);
             scene.push(
                 "ticks",
@@ -131,7 +89,7 @@ impl ScaleBar<'_> {
                     stroke: tick.clone(),
                 },
             );
-            scene.text("ticks", [x, baseline], text, TextAnchor::Middle, light, tick_label(t));
+            scene.text("ticks", [x, baseline], text, TextAnchor::Middle, light, label_short(t));
         }
         let (caption, size) = face.fit(&self.caption, text, w - 2.0 * margin);
         scene.text(
@@ -149,16 +107,6 @@ impl ScaleBar<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn ticks_are_1_2_5_and_thin_to_decades() {
-        assert_eq!(ticks(1.0, 100.0, 20), vec![1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0]);
-        assert_eq!(ticks(1.0, 100.0, 4), vec![1.0, 10.0, 100.0]);
-        assert_eq!(tick_label(5000.0), "5k");
-        assert_eq!(tick_label(0.02), "0.02");
-        assert_eq!(tick_label(2e6), "2M");
-        assert_eq!(tick_label(5e15), "5e15");
-    }
 
     #[test]
     fn the_bar_shows_the_callers_colours() {

@@ -7,7 +7,9 @@ use tiny_skia::{
     Transform,
 };
 
-use super::{LineStyle, PlotError, Rgba, Scene, Shape, TextAnchor, TextItem, Typeface};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor, TextItem};
+use super::PlotError;
+use crate::draw::text::Typeface;
 
 /// Draws every primitive of `scene`, in order, onto an opaque white `width × height` pixmap.
 pub(super) fn render(width: u32, height: u32, scene: &Scene, face: &Typeface) -> Result<Pixmap, PlotError> {

@@ -3,7 +3,8 @@
 
 use std::fmt::Write as _;
 
-use super::{trim_number, LineStyle, Rgba, Scene, Shape, TextAnchor};
+use super::scene::{LineStyle, Rgba, Scene, Shape, TextAnchor};
+use crate::draw::ticks::trim_number;
 
 /// Font family written into the SVG; DejaVu Sans first so the metrics match the layout.
 const FONT_FAMILY: &str = "'DejaVu Sans', Verdana, Arial, sans-serif";

@@ -1,7 +1,3 @@
-//! Diagrams for lighting designers, drawn with one bundled font into SVG and PNG: the polar
-//! intensity diagram here, and the isolux diagram of illuminance on a floor plane
-//! ([`IsoluxPlot`], `plot/isolux.rs`).
-//!
 //! The polar intensity diagram ("LDC", light distribution curve) that lighting designers read: the
 //! C0–C180 and C90–C270 planes drawn over the full circle, γ = 0 (nadir) pointing down, rings at
 //! round 1-2-5 values, spokes every 15°, a legend and a caption with maximum intensity and flux.
@@ -15,42 +11,24 @@
 //! SVG's user units). The right half of the diagram shows C0 (resp. C90) with γ running from 0 at
 //! the bottom to 180 at the top; the left half shows C180 (resp. C270).
 
-mod isolux;
-mod layout;
-pub mod legend;
-mod raster;
-mod svg;
-
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::draw::text::Typeface;
 use tiny_skia::Pixmap;
 
-use self::layout::{
+use super::layout::{
     draw_corner_labels, draw_gamma_labels, draw_grid, draw_header, draw_legend, draw_ring_labels, spoke_labels, Layout,
 };
-use super::luminaire::Photometry;
-
-pub use self::isolux::{write_isolux, ContourLabel, IsoluxPlot, IsoluxPlotOptions};
-
-/// Smallest accepted image width in pixels.
-pub const MIN_SIZE_PX: u32 = 320;
-
-/// Largest accepted image width in pixels.
-pub const MAX_SIZE_PX: u32 = 8192;
+use super::scene::{LineStyle, Scene, Shape, TextAnchor, BLUE, INK, RED};
+use super::{raster, svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, MAX_SIZE_PX, MIN_SIZE_PX};
+use crate::draw::ticks::{label_at_step, step_and_count, trim_number};
+use crate::photometry::luminaire::Photometry;
 
 /// Angular step of the curve samples, degrees.
 pub const SAMPLE_STEP_DEG: f64 = 0.5;
 
 /// Most rings drawn; the ring step is the smallest 1-2-5 value that needs no more.
 const MAX_RINGS: usize = 7;
-
-/// Cap height of DejaVu Sans as a fraction of the font size (digits are as tall).
-const CAP_HEIGHT: f64 = 0.73;
-
-/// Separator between the parts of a text line; no-break spaces survive SVG whitespace collapsing.
-const SEP: &str = "\u{a0} · \u{a0}";
 
 /// The unit of the plotted intensities.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -90,116 +68,6 @@ impl Default for PlotOptions {
             size_px: 800,
         }
     }
-}
-
-/// Output format of a plot file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PlotFormat {
-    /// Scalable vector graphics text.
-    Svg,
-    /// Anti-aliased raster image, 8-bit RGBA.
-    Png,
-}
-
-impl PlotFormat {
-    /// The format named by a file's extension (`.svg` or `.png`, any case).
-    ///
-    /// # Errors
-    /// [`PlotError::UnsupportedFormat`] naming the path for any other extension.
-    pub fn from_path(path: &Path) -> Result<Self, PlotError> {
-        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        match ext.as_deref() {
-            Some("svg") => Ok(PlotFormat::Svg),
-            Some("png") => Ok(PlotFormat::Png),
-            _ => Err(PlotError::UnsupportedFormat {
-                path: path.to_path_buf(),
-            }),
-        }
-    }
-}
-
-/// An error while computing or writing a diagram (polar or isolux).
-#[derive(Debug, thiserror::Error)]
-pub enum PlotError {
-    /// The output file name has neither `.svg` nor `.png` as its extension.
-    #[error("{path}: unsupported plot format: the file name must end in .svg or .png")]
-    UnsupportedFormat {
-        /// The output path as given.
-        path: PathBuf,
-    },
-    /// The requested size is out of range.
-    #[error("plot size {size} px is outside {MIN_SIZE_PX}…{MAX_SIZE_PX} px")]
-    Size {
-        /// The size asked for, pixels.
-        size: u32,
-    },
-    /// cd/klm was asked for but there is no positive flux to divide by.
-    #[error("{file}: cannot plot in cd/klm: {reason}")]
-    NoFlux {
-        /// The photometric file's name.
-        file: String,
-        /// Which flux is missing or zero.
-        reason: String,
-    },
-    /// No point of an isolux grid is lit, so there is no line to draw.
-    #[error("{file}: no light reaches the floor plane {height_m} m below it (0 lx on the whole grid): no isolux line to draw")]
-    NoIlluminance {
-        /// The photometric file's name.
-        file: String,
-        /// The mounting height, metres.
-        height_m: f64,
-    },
-    /// The output file could not be written.
-    #[error("{path}: cannot write file: {source}")]
-    Io {
-        /// The output path.
-        path: PathBuf,
-        /// The operating-system error.
-        source: std::io::Error,
-    },
-    /// Rasterising or PNG encoding failed.
-    #[error("cannot render the PNG: {message}")]
-    Render {
-        /// What failed.
-        message: String,
-    },
-}
-
-/// An sRGB colour with straight (not premultiplied) alpha, 8 bits per channel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Rgba(pub [u8; 4]);
-
-impl Rgba {
-    const fn rgb(r: u8, g: u8, b: u8) -> Self {
-        Rgba([r, g, b, 255])
-    }
-
-    const fn with_alpha(self, a: u8) -> Self {
-        Rgba([self.0[0], self.0[1], self.0[2], a])
-    }
-
-    const fn grey(v: u8) -> Self {
-        Rgba::rgb(v, v, v)
-    }
-}
-
-const WHITE: Rgba = Rgba::grey(255);
-const INK: Rgba = Rgba::grey(34);
-const GREY_TEXT: Rgba = Rgba::grey(85);
-/// Colour of the C0–C180 curve.
-const RED: Rgba = Rgba::rgb(204, 32, 39);
-/// Colour of the C90–C270 curve.
-const BLUE: Rgba = Rgba::rgb(28, 84, 196);
-
-/// How a line is stroked.
-#[derive(Debug, Clone, PartialEq)]
-pub struct LineStyle {
-    /// Stroke colour.
-    pub colour: Rgba,
-    /// Stroke width, pixels.
-    pub width: f64,
-    /// Dash and gap lengths in pixels; `None` for a solid line.
-    pub dash: Option<[f64; 2]>,
 }
 
 /// One plane of the diagram: two opposite C half-planes drawn as one closed curve.
@@ -243,142 +111,6 @@ pub struct Ring {
     pub label: String,
 }
 
-/// Horizontal alignment of a text relative to its anchor point.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum TextAnchor {
-    /// The text starts at the point.
-    Start,
-    /// The text is centred on the point.
-    Middle,
-    /// The text ends at the point.
-    End,
-}
-
-/// A placed line of text.
-#[derive(Debug, Clone, PartialEq)]
-struct TextItem {
-    /// Anchor point, pixels: x as [`TextItem::anchor`] says, y on the baseline.
-    pos: [f64; 2],
-    /// Font size (em), pixels.
-    size: f64,
-    /// Horizontal alignment.
-    anchor: TextAnchor,
-    /// Fill colour.
-    colour: Rgba,
-    /// The text.
-    text: String,
-}
-
-/// A drawing primitive; the SVG and PNG writers both render exactly this list, in order.
-#[derive(Debug, Clone, PartialEq)]
-enum Shape {
-    Rect {
-        min: [f64; 2],
-        max: [f64; 2],
-        fill: Rgba,
-    },
-    Circle {
-        centre: [f64; 2],
-        radius: f64,
-        stroke: LineStyle,
-    },
-    Line {
-        from: [f64; 2],
-        to: [f64; 2],
-        stroke: LineStyle,
-    },
-    Curve {
-        id: &'static str,
-        points: Vec<[f64; 2]>,
-        fill: Rgba,
-        stroke: LineStyle,
-    },
-    /// A stroked, unfilled polyline, closed back to its first point when `closed`.
-    Polyline {
-        points: Vec<[f64; 2]>,
-        closed: bool,
-        stroke: LineStyle,
-    },
-    /// A raster image drawn pixel for pixel with its top-left corner at `min` (whole pixels).
-    Image(RasterImage),
-    Text(TextItem),
-}
-
-/// An RGBA8 image placed in a scene, kept both as premultiplied pixels (for the PNG writer) and
-/// as PNG bytes (embedded in the SVG).
-#[derive(Clone, PartialEq)]
-struct RasterImage {
-    /// Top-left corner, whole pixels.
-    min: [u32; 2],
-    width: u32,
-    height: u32,
-    /// Premultiplied RGBA8, row-major from the top, `width × height × 4` bytes.
-    rgba: Vec<u8>,
-    /// The same image encoded as PNG.
-    png: Vec<u8>,
-}
-
-impl RasterImage {
-    /// An image from premultiplied RGBA8 pixels.
-    ///
-    /// # Errors
-    /// [`PlotError::Render`] when the size does not match the pixels or PNG encoding fails.
-    fn new(min: [u32; 2], width: u32, height: u32, rgba: Vec<u8>) -> Result<Self, PlotError> {
-        let size = tiny_skia::IntSize::from_wh(width, height).ok_or_else(|| PlotError::Render {
-            message: format!("empty {width} × {height} image"),
-        })?;
-        let pixmap = Pixmap::from_vec(rgba.clone(), size).ok_or_else(|| PlotError::Render {
-            message: format!("{} bytes are not a {width} × {height} RGBA image", rgba.len()),
-        })?;
-        let png = pixmap.encode_png().map_err(|e| PlotError::Render {
-            message: format!("PNG encoding of the {width} × {height} fill: {e}"),
-        })?;
-        Ok(RasterImage {
-            min,
-            width,
-            height,
-            rgba,
-            png,
-        })
-    }
-}
-
-impl std::fmt::Debug for RasterImage {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("RasterImage")
-            .field("min", &self.min)
-            .field("width", &self.width)
-            .field("height", &self.height)
-            .field("png_bytes", &self.png.len())
-            .finish_non_exhaustive()
-    }
-}
-
-/// Primitives grouped by layer (the SVG's `<g id>`), in drawing order.
-#[derive(Debug, Clone, PartialEq, Default)]
-struct Scene {
-    items: Vec<(&'static str, Shape)>,
-}
-
-impl Scene {
-    fn push(&mut self, layer: &'static str, shape: Shape) {
-        self.items.push((layer, shape));
-    }
-
-    fn text(&mut self, layer: &'static str, pos: [f64; 2], size: f64, anchor: TextAnchor, colour: Rgba, text: String) {
-        self.push(
-            layer,
-            Shape::Text(TextItem {
-                pos,
-                size,
-                anchor,
-                colour,
-                text,
-            }),
-        );
-    }
-}
-
 /// The complete polar diagram of one luminaire: geometry, values and every label, in pixels.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PolarPlot {
@@ -405,11 +137,6 @@ pub struct PolarPlot {
     /// Caption lines below the legend (maximum intensity, flux, what cd/klm refers to).
     pub caption: Vec<String>,
     scene: Scene,
-}
-
-/// The bundled font ([`crate::draw::text`]), its error as the plot's.
-fn typeface() -> Result<Typeface, PlotError> {
-    Typeface::load().map_err(|message| PlotError::Render { message })
 }
 
 impl PolarPlot {
@@ -443,18 +170,13 @@ impl PolarPlot {
             let left = c.gamma_deg.iter().zip(&c.left).rev().map(at(false));
             c.points = right.chain(left).collect();
         }
-        let decimals = if step >= 1.0 {
-            0
-        } else {
-            (-step.log10() - 1e-9).ceil() as usize
-        };
         let rings: Vec<Ring> = (1..=count)
             .map(|i| {
                 let value = step * i as f64;
                 Ring {
                     value,
                     radius: lay.radius * value / outer_value,
-                    label: format!("{value:.decimals$}"),
+                    label: label_at_step(value, step),
                 }
             })
             .collect();
@@ -657,47 +379,11 @@ fn sample_curves(p: &Photometry, cd_to_unit: f64, line: f64) -> Vec<PlaneCurve> 
 
 /// The ring step (1-2-5 series) and ring count (at most [`MAX_RINGS`]) for a maximum value.
 fn ring_step(max: f64) -> (f64, usize) {
-    if !(max.is_finite() && max > 0.0) {
-        return (1.0, 5);
-    }
-    let magnitude = 10f64.powf((max / MAX_RINGS as f64).log10().floor());
-    for m in [1.0, 2.0, 5.0, 10.0, 20.0, 50.0] {
-        let step = m * magnitude;
-        let count = (max / step - 1e-9).ceil().max(1.0) as usize;
-        if count <= MAX_RINGS {
-            return (step, count);
-        }
-    }
-    (100.0 * magnitude, 1)
+    step_and_count(max, MAX_RINGS).unwrap_or((1.0, 5))
 }
 
-/// First non-empty label among `keys` (case-insensitive), whitespace collapsed to single spaces.
-fn label(p: &Photometry, keys: &[&str]) -> Option<String> {
-    keys.iter().find_map(|k| {
-        p.labels
-            .iter()
-            .find(|(key, v)| key.eq_ignore_ascii_case(k) && !v.trim().is_empty())
-            .map(|(_, v)| v.split_whitespace().collect::<Vec<_>>().join(" "))
-    })
-}
-
-fn file_name(p: &Photometry) -> String {
-    Path::new(&p.source)
-        .file_name()
-        .map_or_else(|| p.source.clone(), |f| f.to_string_lossy().into_owned())
-}
-
-/// The luminaire's name from its labels, else its catalogue number, else the first free label
-/// line, else the file name.
-fn title_of(p: &Photometry) -> String {
-    label(p, &["LUMINAIRE", "luminaire name"])
-        .or_else(|| label(p, &["LUMCAT", "luminaire number"]))
-        .or_else(|| label(p, &[""]))
-        .unwrap_or_else(|| file_name(p))
-}
-
-/// The caption, as lines of parts (joined with [`SEP`], wrapped between parts where too wide):
-/// maximum intensity and where; integrated and rated flux; what cd/klm refers to.
+/// The caption, as lines of parts (joined with [`SEP`](super::SEP), wrapped between parts where
+/// too wide): maximum intensity and where; integrated and rated flux; what cd/klm refers to.
 fn caption_parts(
     p: &Photometry,
     unit: PlotUnit,
@@ -737,21 +423,6 @@ fn caption_parts(
     lines
 }
 
-/// Joins `parts` with [`SEP`] into as few lines as fit `max_width`, breaking only between parts.
-fn wrap_parts(face: &Typeface, parts: &[String], size: f64, max_width: f64) -> Vec<String> {
-    let mut lines: Vec<String> = Vec::new();
-    for part in parts {
-        match lines.last_mut() {
-            Some(last) if face.width(&format!("{last}{SEP}{part}"), size) <= max_width => {
-                last.push_str(SEP);
-                last.push_str(part);
-            }
-            _ => lines.push(part.clone()),
-        }
-    }
-    lines
-}
-
 /// A value for display: no decimals from 100 up, three significant digits below.
 fn fmt_value(v: f64) -> String {
     if !v.is_finite() {
@@ -770,19 +441,6 @@ fn fmt_angle(a: f64) -> String {
     trim_number(format!("{a:.2}"))
 }
 
-/// Drops trailing zeros (and a trailing point) of a formatted decimal; `-0` becomes `0`.
-fn trim_number(s: String) -> String {
-    if !s.contains('.') {
-        return s;
-    }
-    let t = s.trim_end_matches('0').trim_end_matches('.');
-    if t == "-0" {
-        "0".to_string()
-    } else {
-        t.to_string()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -799,20 +457,6 @@ mod tests {
     }
 
     #[test]
-    fn format_from_extension() {
-        assert_eq!(PlotFormat::from_path(Path::new("a/b.SVG")).ok(), Some(PlotFormat::Svg));
-        assert_eq!(PlotFormat::from_path(Path::new("b.png")).ok(), Some(PlotFormat::Png));
-        let e = PlotFormat::from_path(Path::new("out/plot.jpg"));
-        assert!(matches!(&e, Err(PlotError::UnsupportedFormat { .. })));
-        assert!(e
-            .err()
-            .map(|e| e.to_string())
-            .unwrap_or_default()
-            .contains("out/plot.jpg"));
-        assert!(PlotFormat::from_path(Path::new("noext")).is_err());
-    }
-
-    #[test]
     fn numbers_for_display() {
         assert_eq!(fmt_angle(62.5), "62.5");
         assert_eq!(fmt_angle(65.0), "65");
@@ -820,17 +464,5 @@ mod tests {
         assert_eq!(fmt_value(9560.8), "9561");
         assert_eq!(fmt_value(46.34), "46.3");
         assert_eq!(fmt_value(f64::NAN), "—");
-    }
-
-    #[test]
-    fn the_font_has_the_glyphs_used() {
-        use ab_glyph::Font;
-        let face = typeface().map_err(|e| e.to_string());
-        assert!(face.is_ok(), "{:?}", face.as_ref().err());
-        if let Ok(face) = face {
-            for ch in "0123456789°γ–·…\u{a0}cd/klmC()".chars() {
-                assert_ne!(face.font.glyph_id(ch).0, 0, "{ch:?} missing from the bundled font");
-            }
-        }
     }
 }
