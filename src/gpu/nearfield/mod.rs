@@ -2,7 +2,7 @@
 //! the luminance its capture cameras measured (shaders/nearfield/pass.wgsl says what each fragment does).
 //!
 //! A [`NearfieldLuminaire`] holds on the GPU: the camera records, the selection tables
-//! ([`Selection`]), a chunk map and a pool of residency chunks ([`super::residency`]) within a
+//! ([`crate::nearfield::select::Selection`]), a chunk map and a pool of residency chunks ([`super::residency`]) within a
 //! budget, plus its bounding box and optional proxy mesh. When the whole pack fits the budget it is
 //! uploaded once; otherwise each frame first makes resident every chunk of every camera the frame can
 //! select (found on the CPU from the view, conservatively), so a frame never reads a tile that is not
@@ -31,7 +31,8 @@ pub struct NearfieldOptions {
     /// together. The pool gets what the rest leaves, at most [`MAX_POOL_PAGES`] × 128 MiB.
     pub budget_bytes: u64,
     /// Radius (m) of the ball around the capture centre that holds everything the cameras saw;
-    /// `None` derives it from the cameras' tile bounding boxes (see [`content_radius_m`]).
+    /// `None` derives it from the cameras' tile bounding boxes (see
+    /// [`crate::nearfield::select::view::content_radius_m`]).
     pub content_radius_m: Option<f64>,
     /// Selection-table options.
     pub selection: SelectionOptions,

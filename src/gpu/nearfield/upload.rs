@@ -24,11 +24,11 @@ impl NearfieldPass {
     /// `opts.budget_bytes` (the whole pack when it fits). `proxy` is a triangle list in the luminaire
     /// frame (m).
     ///
-    /// The steps: check the inputs ([`content_radius`]); lay out the storage blocks on the CPU
-    /// ([`camera_records`], [`selection_lists`], [`geometry_block`], [`check_binding_limits`],
-    /// [`luminaire_block`]); create the fixed buffers ([`FixedBuffers`]); size and allocate the tile
-    /// pool within the budget ([`TilePool`]); bind it all; upload every tile when the pool holds the
-    /// whole pack ([`NearfieldLuminaire::upload_all`]).
+    /// The steps: check the inputs (`content_radius`); lay out the storage blocks on the CPU
+    /// (`camera_records`, `selection_lists`, `geometry_block`, `check_binding_limits`,
+    /// `luminaire_block`); create the fixed buffers (`FixedBuffers`); size and allocate the tile
+    /// pool within the budget (`TilePool`); bind it all; upload every tile when the pool holds the
+    /// whole pack (`NearfieldLuminaire::upload_all`).
     pub fn upload(
         &self,
         ctx: &GpuContext,
