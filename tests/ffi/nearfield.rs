@@ -194,7 +194,7 @@ fn nearfield_scans_through_the_c_api() {
 
         // Every selection mode, proxy on (the luminaire has none: the capture-sphere path) and off.
         // Without a proxy each selected camera is sampled along the view direction (the
-        // "infinite-depth billboard", shaders/nearfield.wgsl): with cameras ~10° apart, as here, the
+        // "infinite-depth billboard", shaders/nearfield/pass.wgsl): with cameras ~10° apart, as here, the
         // cameras other than the nearest look past a 100 mm disc, so only "something lit, never
         // brighter than the disc, at the stand-in depth" holds; exactness is the proxy's (below).
         let modes = [
