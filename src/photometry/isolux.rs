@@ -38,6 +38,7 @@ use rayon::prelude::*;
 use super::contour::{contour_lines, Polyline};
 use super::luminaire::Photometry;
 use super::web::angles_of;
+use crate::draw::ticks::trim_number;
 
 /// The fraction of the maximum illuminance down to which isolux levels are drawn and the automatic
 /// extent reaches.
@@ -392,7 +393,7 @@ impl IsoluxGrid {
 
 /// A coordinate rounded to 1 nm, trailing zeros dropped (`0.21`, not `0.21000000000000002`).
 fn fmt_coordinate(v: f64) -> String {
-    trim_zeros(format!("{v:.9}"))
+    trim_number(format!("{v:.9}"))
 }
 
 /// `v` with `digits` significant digits in plain decimal notation, trailing zeros dropped.
@@ -401,19 +402,7 @@ fn fmt_significant(v: f64, digits: i32) -> String {
         return if v.is_finite() { "0".to_string() } else { format!("{v}") };
     }
     let decimals = (digits - 1 - v.abs().log10().floor() as i32).clamp(0, 15) as usize;
-    trim_zeros(format!("{v:.decimals$}"))
-}
-
-fn trim_zeros(s: String) -> String {
-    if !s.contains('.') {
-        return s;
-    }
-    let t = s.trim_end_matches('0').trim_end_matches('.');
-    if t == "-0" {
-        "0".to_string()
-    } else {
-        t.to_string()
-    }
+    trim_number(format!("{v:.decimals$}"))
 }
 
 #[cfg(test)]

@@ -120,6 +120,21 @@ fn typeface() -> Result<Typeface, PlotError> {
     Typeface::load().map_err(|message| PlotError::Render { message })
 }
 
+/// A diagram's scene rasterised, anti-aliased, onto an opaque white pixmap of `width × height`:
+/// what the polar and isolux diagrams' `to_pixmap` return.
+fn scene_pixmap(width: u32, height: u32, scene: &scene::Scene) -> Result<tiny_skia::Pixmap, PlotError> {
+    raster::render(width, height, scene, &typeface()?)
+}
+
+/// A diagram's scene as PNG file bytes (8-bit RGBA): what the diagrams' `to_png` return.
+fn scene_png(width: u32, height: u32, scene: &scene::Scene) -> Result<Vec<u8>, PlotError> {
+    scene_pixmap(width, height, scene)?
+        .encode_png()
+        .map_err(|e| PlotError::Render {
+            message: format!("PNG encoding: {e}"),
+        })
+}
+
 /// First non-empty label among `keys` (case-insensitive), whitespace collapsed to single spaces.
 fn label(p: &Photometry, keys: &[&str]) -> Option<String> {
     keys.iter().find_map(|k| {

@@ -20,7 +20,7 @@ use super::layout::{
     draw_corner_labels, draw_gamma_labels, draw_grid, draw_header, draw_legend, draw_ring_labels, spoke_labels, Layout,
 };
 use super::scene::{LineStyle, Scene, Shape, TextAnchor, BLUE, INK, RED};
-use super::{raster, svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, MAX_SIZE_PX, MIN_SIZE_PX};
+use super::{svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, MAX_SIZE_PX, MIN_SIZE_PX};
 use crate::draw::ticks::{label_at_step, step_and_count, trim_number};
 use crate::photometry::luminaire::Photometry;
 
@@ -254,7 +254,7 @@ impl PolarPlot {
     /// # Errors
     /// [`PlotError::Render`] if the pixmap cannot be allocated.
     pub fn to_pixmap(&self) -> Result<Pixmap, PlotError> {
-        raster::render(self.width, self.height, &self.scene, &typeface()?)
+        super::scene_pixmap(self.width, self.height, &self.scene)
     }
 
     /// The diagram as PNG file bytes (8-bit RGBA).
@@ -262,9 +262,7 @@ impl PolarPlot {
     /// # Errors
     /// [`PlotError::Render`] if rasterising or encoding fails.
     pub fn to_png(&self) -> Result<Vec<u8>, PlotError> {
-        self.to_pixmap()?.encode_png().map_err(|e| PlotError::Render {
-            message: format!("PNG encoding: {e}"),
-        })
+        super::scene_png(self.width, self.height, &self.scene)
     }
 }
 

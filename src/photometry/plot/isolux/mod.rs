@@ -41,7 +41,7 @@ use self::page::{contour_style, fmt_metres, Mapping, Page};
 use self::titles::{draw_header, draw_legend};
 use super::layout::Bounds;
 use super::scene::{LineStyle, Scene, Shape, TextAnchor, INK};
-use super::{raster, svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, MAX_SIZE_PX, MIN_SIZE_PX, SEP};
+use super::{svg, title_of, typeface, wrap_parts, PlotError, PlotFormat, MAX_SIZE_PX, MIN_SIZE_PX, SEP};
 use crate::draw::ticks::{step_for_span, symmetric_ticks};
 use crate::photometry::isolux::{IsoluxContour, IsoluxGrid, MaxPoint};
 use crate::photometry::luminaire::Photometry;
@@ -261,7 +261,7 @@ impl IsoluxPlot {
     /// # Errors
     /// [`PlotError::Render`] if the pixmap cannot be allocated.
     pub fn to_pixmap(&self) -> Result<Pixmap, PlotError> {
-        raster::render(self.width, self.height, &self.scene, &typeface()?)
+        super::scene_pixmap(self.width, self.height, &self.scene)
     }
 
     /// The diagram as PNG file bytes (8-bit RGBA).
@@ -269,9 +269,7 @@ impl IsoluxPlot {
     /// # Errors
     /// [`PlotError::Render`] if rasterising or encoding fails.
     pub fn to_png(&self) -> Result<Vec<u8>, PlotError> {
-        self.to_pixmap()?.encode_png().map_err(|e| PlotError::Render {
-            message: format!("PNG encoding: {e}"),
-        })
+        super::scene_png(self.width, self.height, &self.scene)
     }
 }
 
