@@ -1,9 +1,10 @@
 //! Any luminaire file lumiview reads: which kind it is (from its first bytes) and opening it as
 //! what lumiview draws. This is the one dispatch from a path to a reader: the C API
-//! (`lumi_luminaire_load`), the CLI (`render`, `info`, `pack`, `cameras`) and the packer all go
-//! through [`detect`] and [`open`]. Adding a format means a [`SourceKind`], its detection and its
-//! opening, here (a scan format's reader in `nearfield::scanfile`, a photometric one in
-//! `photometry::load`).
+//! (`lumi_luminaire_load`) and the CLI's commands (`render`, `info`, `pack`, `cameras`) tell files
+//! apart with [`detect`], and `lumi_luminaire_load` and the CLI's scan loading open them with
+//! [`open`]. Adding a format means a [`SourceKind`], its detection (a scan's magic in
+//! `nearfield::scanfile::kind_of`, or the photometric reader `photometry::load`) and its branch in
+//! [`open`]; the compiler then points at each `match` on the kind that must say what to do with it.
 //!
 //! Pure CPU.
 

@@ -189,8 +189,9 @@ impl NearfieldLuminaire {
         else {
             return (resident, None);
         };
-        // Continuous: the triangle raster; otherwise, or where it does not apply, the hull.
-        if mode == SelectionMode::Continuous {
+        // Blending over triangles (continuous): the triangle raster; otherwise, or where it does not
+        // apply, the hull.
+        if mode.blends_triangles() {
             let raster = self.lit.continuous_raster(
                 &self.selection,
                 &tris,
