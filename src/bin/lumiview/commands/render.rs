@@ -209,53 +209,50 @@ pub fn render(a: &RenderArgs) -> CliResult {
         let m = lumiview::nearfield::manifest::read_manifest(&a.file)?;
         lumiview::files::ensure_not_input(&a.output, m.entries.iter().map(|e| e.file.as_path()))?;
     }
-    let photometry = match kind.is_scan() {
-        true => {
-            for (given, name) in [
-                (a.solid, "--solid"),
-                (a.housing, "--housing"),
-                (a.load.tilt.is_some(), "--tilt"),
-                (a.load.lamp_set.is_some(), "--lamp-set"),
-            ] {
-                if given {
-                    return Err(format!(
-                        "{name} applies to photometric files (IES, EULUMDAT); {} is a near-field scan",
-                        a.file.display()
-                    )
-                    .into());
+    let photometry = if kind.is_scan() {
+        for (given, name) in [
+            (a.solid, "--solid"),
+            (a.housing, "--housing"),
+            (a.load.tilt.is_some(), "--tilt"),
+            (a.load.lamp_set.is_some(), "--lamp-set"),
+        ] {
+            if given {
+                return Err(format!(
+                    "{name} applies to photometric files (IES, EULUMDAT); {} is a near-field scan",
+                    a.file.display()
+                )
+                .into());
+            }
+        }
+        None
+    } else {
+        if a.proxy.is_some() || a.no_proxy {
+            return Err(format!(
+                "--proxy / --no-proxy apply to near-field scans; {} is a photometric file",
+                a.file.display()
+            )
+            .into());
+        }
+        let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
+        if a.housing && p.luminaire_size_m.is_none() {
+            return Err(format!(
+                "--housing: {} gives no luminaire (housing) dimensions{}",
+                a.file.display(),
+                if matches!(p.format, lumiview::photometry::FileFormat::Ies(_)) {
+                    " (IES files have none; EULUMDAT files do)"
+                } else {
+                    " (its luminaire length is 0)"
                 }
-            }
-            None
+            )
+            .into());
         }
-        false => {
-            if a.proxy.is_some() || a.no_proxy {
-                return Err(format!(
-                    "--proxy / --no-proxy apply to near-field scans; {} is a photometric file",
-                    a.file.display()
-                )
-                .into());
-            }
-            let p = std::sync::Arc::new(super::load(&a.file, &a.load)?);
-            if a.housing && p.luminaire_size_m.is_none() {
-                return Err(format!(
-                    "--housing: {} gives no luminaire (housing) dimensions{}",
-                    a.file.display(),
-                    if matches!(p.format, lumiview::photometry::FileFormat::Ies(_)) {
-                        " (IES files have none; EULUMDAT files do)"
-                    } else {
-                        " (its luminaire length is 0)"
-                    }
-                )
-                .into());
-            }
-            if p.opening.is_point() {
-                eprintln!(
-                    "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
-                    a.file.display()
-                );
-            }
-            Some(p)
+        if p.opening.is_point() {
+            eprintln!(
+                "lumiview: warning: {} declares no luminous opening: nothing to draw (overlays only)",
+                a.file.display()
+            );
         }
+        Some(p)
     };
     let mut r = Renderer::new(&ContextDesc::default())?;
     let loaded = match photometry {
