@@ -12,6 +12,7 @@ pub mod pack;
 pub mod proxy;
 pub mod raykde;
 pub mod rayset;
+pub mod reconstruct;
 pub mod scanfile;
 pub mod select;
 pub mod synth;

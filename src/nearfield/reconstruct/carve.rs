@@ -1,0 +1,235 @@
+//! Space carving on an octree: a cube of space holds no luminous surface when some camera that sees
+//! all of it sees only darkness there. Cubes start at 8 per axis over the content box and are split
+//! until the finest level; a cube every camera sees wholly lit is kept with all its descendants
+//! without further tests, so work grows with the surface, not the volume.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::hemisphere::in_open_hemisphere;
+use super::mask::LitMask;
+use crate::nearfield::rayset::{Camera, Intrinsics};
+
+/// One capture camera with its lit mask.
+#[derive(Debug)]
+pub struct View {
+    /// Pose (luminaire frame, m).
+    pub camera: Camera,
+    /// Intrinsics.
+    pub intrinsics: Intrinsics,
+    /// Where its image holds light.
+    pub mask: LitMask,
+}
+
+/// What a view says about a cube.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Verdict {
+    /// Every pixel of its footprint is dark: nothing luminous inside.
+    Dark,
+    /// Every pixel of its footprint is lit.
+    Lit,
+    /// Some pixel of its footprint may be lit (or the footprint is too large to tell).
+    Mixed,
+    /// Not wholly in view (or behind the camera): no evidence.
+    Unseen,
+}
+
+impl View {
+    fn judge(&self, centre: DVec3, half_m: f64) -> Verdict {
+        let d = centre - self.camera.position_m;
+        let c = self.camera.to_camera(d);
+        let rho = half_m * 3f64.sqrt();
+        if c.z - rho <= 1e-9 {
+            return Verdict::Unseen;
+        }
+        let Some(px) = self.intrinsics.project(c) else {
+            return Verdict::Unseen;
+        };
+        let t2 = (c.x * c.x + c.y * c.y) / (c.z * c.z);
+        let f = self.intrinsics.focal_px.x.max(self.intrinsics.focal_px.y);
+        // The bounding sphere's image lies within this square (off-axis stretch included).
+        let r = rho * f * (1.0 + t2) / (c.z - rho);
+        match self.mask.dark(px.x, px.y, r) {
+            Some(true) => Verdict::Dark,
+            Some(false) if self.mask.lit(px.x, px.y, r) => Verdict::Lit,
+            Some(false) => Verdict::Mixed,
+            None => Verdict::Unseen,
+        }
+    }
+}
+
+/// The carved volume: cubes of `voxel_m` over `n`³ cells from `origin`, occupied or not.
+#[derive(Debug, Clone)]
+pub struct Occupancy {
+    /// Corner of cell (0, 0, 0) (m, luminaire frame).
+    pub origin: DVec3,
+    /// Cell edge (m).
+    pub voxel_m: f64,
+    /// Cells per axis.
+    pub n: usize,
+    /// `n³` flags, x fastest.
+    pub cells: Vec<bool>,
+    /// Cube tests made (one cube against one view), for the report.
+    pub tests: u64,
+}
+
+impl Occupancy {
+    /// Whether cell (x, y, z) is occupied (false outside the grid).
+    pub fn at(&self, x: i64, y: i64, z: i64) -> bool {
+        let n = self.n as i64;
+        (0..n).contains(&x) && (0..n).contains(&y) && (0..n).contains(&z) && self.cells[((z * n + y) * n + x) as usize]
+    }
+
+    /// Occupied cells.
+    pub fn count(&self) -> usize {
+        self.cells.iter().filter(|&&c| c).count()
+    }
+
+    /// Centre of cell (x, y, z) (m).
+    pub fn centre(&self, x: usize, y: usize, z: usize) -> DVec3 {
+        self.origin + (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * self.voxel_m
+    }
+}
+
+/// A coarse cube: `Some(false)` (carve: some camera sees it all dark, none sees light in it),
+/// `Some(true)` (keep with every descendant: every camera sees it wholly lit) or `None` (split).
+/// Stops at the first camera that rules out both. Returns the tests made.
+fn screen(views: &[View], c: DVec3, h: f64) -> (Option<bool>, u64) {
+    let (mut dark, mut light, mut all_lit) = (false, false, !views.is_empty());
+    for (k, v) in views.iter().enumerate() {
+        match v.judge(c, h) {
+            Verdict::Dark => {
+                dark = true;
+                all_lit = false;
+            }
+            Verdict::Lit => light = true,
+            Verdict::Mixed => {
+                light = true;
+                all_lit = false;
+            }
+            Verdict::Unseen => all_lit = false,
+        }
+        if light && !all_lit {
+            return (None, k as u64 + 1);
+        }
+    }
+    let n = views.len() as u64;
+    if all_lit {
+        (Some(true), n)
+    } else if dark && !light {
+        (Some(false), n)
+    } else {
+        (None, n)
+    }
+}
+
+/// A finest cube: kept when no camera sees it all dark, or when some camera sees it wholly lit and
+/// some plane through it has every camera that sees it wholly lit in front and every camera that
+/// sees it dark behind ([`in_open_hemisphere`]): it may hold a one-sided emitter whose back those
+/// dark cameras see.
+fn decide(views: &[View], c: DVec3, h: f64) -> (Option<bool>, u64) {
+    let mut dirs = Vec::new();
+    let (mut dark, mut light) = (0usize, 0usize);
+    for v in views {
+        let towards = (v.camera.position_m - c).normalize_or_zero();
+        match v.judge(c, h) {
+            Verdict::Dark => {
+                dark += 1;
+                dirs.push(-towards);
+            }
+            Verdict::Lit => {
+                light += 1;
+                dirs.push(towards);
+            }
+            // A footprint only partly lit proves nothing: beside a silhouette, a grazing camera sees
+            // the light behind the cube along its whole line of sight.
+            Verdict::Mixed | Verdict::Unseen => {}
+        }
+    }
+    let keep = dark == 0 || (light > 0 && in_open_hemisphere(&dirs));
+    (Some(keep), views.len() as u64)
+}
+
+/// Cells per axis at the coarsest level.
+pub const BASE_CELLS: usize = 8;
+
+/// Carves the cube of half-size `half_m` about `centre` down to `BASE_CELLS · 2^levels` cells per
+/// axis; cubes wholly outside the ball of `content_m` about `centre` are empty. `progress(level,
+/// levels)` after each level.
+pub fn carve(
+    views: &[View],
+    centre: DVec3,
+    half_m: f64,
+    content_m: f64,
+    levels: u32,
+    progress: &(dyn Fn(u32, u32) + Sync),
+) -> Occupancy {
+    let n = BASE_CELLS << levels;
+    let origin = centre - DVec3::splat(half_m);
+    let mut cells = vec![false; n * n * n];
+    let mut tests = 0u64;
+    // Cells of the current level still undecided, as (x, y, z) at that level.
+    let mut open: Vec<[u32; 3]> = Vec::new();
+    for z in 0..BASE_CELLS as u32 {
+        for y in 0..BASE_CELLS as u32 {
+            for x in 0..BASE_CELLS as u32 {
+                open.push([x, y, z]);
+            }
+        }
+    }
+    for level in 0..=levels {
+        let size = 2.0 * half_m / (BASE_CELLS << level) as f64;
+        let finest = level == levels;
+        let judged: Vec<([u32; 3], Option<bool>, u64)> = open
+            .par_iter()
+            .map(|&[x, y, z]| {
+                let c = origin + (DVec3::new(f64::from(x), f64::from(y), f64::from(z)) + 0.5) * size;
+                let h = size / 2.0;
+                if (c - centre).length() - h * 3f64.sqrt() > content_m {
+                    return ([x, y, z], Some(false), 0);
+                }
+                let (verdict, k) = if finest {
+                    decide(views, c, h)
+                } else {
+                    screen(views, c, h)
+                };
+                ([x, y, z], verdict, k)
+            })
+            .collect();
+        let scale = 1usize << (levels - level);
+        let mut next = Vec::new();
+        for ([x, y, z], verdict, k) in judged {
+            tests += k;
+            match verdict {
+                Some(true) => {
+                    let (x0, y0, z0) = (x as usize * scale, y as usize * scale, z as usize * scale);
+                    for zz in z0..z0 + scale {
+                        for yy in y0..y0 + scale {
+                            let row = (zz * n + yy) * n;
+                            cells[row + x0..row + x0 + scale].fill(true);
+                        }
+                    }
+                }
+                Some(false) => {}
+                None => {
+                    for dz in 0..2 {
+                        for dy in 0..2 {
+                            for dx in 0..2 {
+                                next.push([2 * x + dx, 2 * y + dy, 2 * z + dz]);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        progress(level + 1, levels + 1);
+        open = next;
+    }
+    Occupancy {
+        origin,
+        voxel_m: 2.0 * half_m / n as f64,
+        n,
+        cells,
+        tests,
+    }
+}

@@ -1,0 +1,298 @@
+//! Where one capture image holds light, stored small enough to keep a thousand of them: the lit
+//! pixels as runs per row (exact, for small footprints) and a chessboard distance map over
+//! `COARSE_PX`-pixel cells (for large ones). Both answer one question conservatively: "is every pixel
+//! of this square dark?" A square is called dark only when it certainly is.
+
+use crate::nearfield::rayset::LuminanceImage;
+
+/// Edge of a coarse cell (px).
+pub const COARSE_PX: u32 = 8;
+
+/// Squares with more rows than this are answered from the coarse map.
+const EXACT_ROWS: i64 = 24;
+
+/// The lit pixels of one image.
+#[derive(Debug, Clone)]
+pub struct LitMask {
+    width: u32,
+    height: u32,
+    /// Index into `runs` of each row's first run; `height + 1` entries.
+    row_start: Vec<u32>,
+    /// Lit runs `[start, end)` (columns), row by row, left to right.
+    runs: Vec<(u16, u16)>,
+    /// Coarse cells across and down.
+    cw: u32,
+    ch: u32,
+    /// Chessboard distance (cells, saturating at 255) from each coarse cell to the nearest cell
+    /// holding a lit pixel (0: the cell holds one).
+    dist: Vec<u8>,
+    /// Lit pixels.
+    pub lit_pixels: u64,
+    /// Largest luminance in the image (cd/m²).
+    pub max_cd_m2: f32,
+}
+
+impl LitMask {
+    /// The pixels of `img` at or above `relative · max` (and above 0), where max is the image's
+    /// largest value; `None` when the image holds no light at all.
+    pub fn of(img: &LuminanceImage, relative: f32) -> Option<Self> {
+        let (w, h) = (img.width, img.height);
+        let max = img
+            .data
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .fold(0.0f32, f32::max);
+        if max <= 0.0 || w > u32::from(u16::MAX) {
+            return None;
+        }
+        let floor = (relative * max).max(f32::MIN_POSITIVE);
+        let (cw, ch) = (w.div_ceil(COARSE_PX), h.div_ceil(COARSE_PX));
+        let mut lit_cells = vec![false; (cw * ch) as usize];
+        let mut row_start = Vec::with_capacity(h as usize + 1);
+        let mut runs = Vec::new();
+        let mut lit_pixels = 0u64;
+        for r in 0..h {
+            row_start.push(runs.len() as u32);
+            let row = &img.data[(r * w) as usize..((r + 1) * w) as usize];
+            let mut c = 0usize;
+            while c < row.len() {
+                if row[c] >= floor {
+                    let s = c;
+                    while c < row.len() && row[c] >= floor {
+                        c += 1;
+                    }
+                    runs.push((s as u16, c as u16));
+                    lit_pixels += (c - s) as u64;
+                    let cy = r / COARSE_PX;
+                    for cx in (s as u32 / COARSE_PX)..=((c as u32 - 1) / COARSE_PX) {
+                        lit_cells[(cy * cw + cx) as usize] = true;
+                    }
+                } else {
+                    c += 1;
+                }
+            }
+        }
+        row_start.push(runs.len() as u32);
+        Some(Self {
+            width: w,
+            height: h,
+            row_start,
+            runs,
+            cw,
+            ch,
+            dist: chessboard(&lit_cells, cw as usize, ch as usize),
+            lit_pixels,
+            max_cd_m2: max,
+        })
+    }
+
+    /// Image width and height (px).
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The lit pixels' bounding box `[col0, col1, row0, row1]` (pixel edges, px).
+    pub fn lit_box(&self) -> Option<[f64; 4]> {
+        let rows: Vec<usize> = (0..self.height as usize)
+            .filter(|&r| self.row_start[r + 1] > self.row_start[r])
+            .collect();
+        let (first, last) = (*rows.first()?, *rows.last()?);
+        let (mut c0, mut c1) = (u16::MAX, 0u16);
+        for &(s, e) in &self.runs {
+            c0 = c0.min(s);
+            c1 = c1.max(e);
+        }
+        Some([f64::from(c0), f64::from(c1), first as f64, (last + 1) as f64])
+    }
+
+    /// Bytes held.
+    pub fn bytes(&self) -> usize {
+        self.row_start.len() * 4 + self.runs.len() * 4 + self.dist.len()
+    }
+
+    /// Whether every pixel whose centre lies in the square of half-size `r` (px) about (u, v) (pixel
+    /// coordinates, top-left corner 0) is dark. `None` when the square is not wholly inside the
+    /// image (the camera does not see all of it, so it says nothing).
+    pub fn dark(&self, u: f64, v: f64, r: f64) -> Option<bool> {
+        let (x0, x1, y0, y1) = (u - r, u + r, v - r, v + r);
+        if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= f64::from(self.width) && y1 <= f64::from(self.height)) {
+            return None;
+        }
+        // Pixels whose centres (c + 0.5) fall in [x0, x1].
+        let (c0, c1) = ((x0 - 0.5).ceil() as i64, (x1 - 0.5).floor() as i64);
+        let (r0, r1) = ((y0 - 0.5).ceil() as i64, (y1 - 0.5).floor() as i64);
+        if c1 < c0 || r1 < r0 {
+            return Some(true);
+        }
+        if r1 - r0 < EXACT_ROWS {
+            return Some(self.rows_dark(c0, c1, r0, r1));
+        }
+        // Coarse: the cell of (u, v) and its chessboard distance d to light. Every lit pixel is then
+        // more than (d − 1)·COARSE_PX px from (u, v) along x or y.
+        let (cx, cy) = ((u / f64::from(COARSE_PX)) as u32, (v / f64::from(COARSE_PX)) as u32);
+        let d = self.dist[(cy.min(self.ch - 1) * self.cw + cx.min(self.cw - 1)) as usize];
+        if f64::from(d.saturating_sub(1)) * f64::from(COARSE_PX) > r + 1.0 {
+            return Some(true);
+        }
+        Some(false)
+    }
+
+    /// Whether every pixel whose centre lies in the square of half-size `r` (px) about (u, v) is lit;
+    /// `false` where that is not certain (the square is large, leaves the image or holds no pixel
+    /// centre).
+    pub fn lit(&self, u: f64, v: f64, r: f64) -> bool {
+        let (x0, x1, y0, y1) = (u - r, u + r, v - r, v + r);
+        if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= f64::from(self.width) && y1 <= f64::from(self.height)) {
+            return false;
+        }
+        let (c0, c1) = ((x0 - 0.5).floor() as i64, (x1 - 0.5).ceil() as i64);
+        let (r0, r1) = ((y0 - 0.5).floor() as i64, (y1 - 0.5).ceil() as i64);
+        if r1 - r0 + 1 > EXACT_ROWS || c0 < 0 || r0 < 0 || c1 >= i64::from(self.width) || r1 >= i64::from(self.height) {
+            return false;
+        }
+        // The pixels around the square too (a surface between pixel centres is lit only if both are).
+        (r0..=r1).all(|r| {
+            let runs = &self.runs[self.row_start[r as usize] as usize..self.row_start[r as usize + 1] as usize];
+            let i = runs.partition_point(|&(_, e)| i64::from(e) <= c0);
+            runs.get(i)
+                .is_some_and(|&(s, e)| i64::from(s) <= c0 && i64::from(e) > c1)
+        })
+    }
+
+    /// Whether rows `r0..=r1` hold no lit pixel in columns `c0..=c1`.
+    fn rows_dark(&self, c0: i64, c1: i64, r0: i64, r1: i64) -> bool {
+        for r in r0.max(0)..=r1.min(i64::from(self.height) - 1) {
+            let runs = &self.runs[self.row_start[r as usize] as usize..self.row_start[r as usize + 1] as usize];
+            // First run ending after c0.
+            let i = runs.partition_point(|&(_, e)| i64::from(e) <= c0);
+            if let Some(&(s, _)) = runs.get(i) {
+                if i64::from(s) <= c1 {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+}
+
+/// Chessboard distance (saturating at 255) from each cell to the nearest `true` cell; all 255 when
+/// there is none. Two passes with the 8-neighbourhood (exact for the chessboard metric).
+fn chessboard(lit: &[bool], w: usize, h: usize) -> Vec<u8> {
+    let mut d: Vec<u8> = lit.iter().map(|&l| if l { 0 } else { 255 }).collect();
+    let at = |x: usize, y: usize| y * w + x;
+    for y in 0..h {
+        for x in 0..w {
+            let mut m = d[at(x, y)];
+            if x > 0 {
+                m = m.min(d[at(x - 1, y)].saturating_add(1));
+            }
+            if y > 0 {
+                m = m.min(d[at(x, y - 1)].saturating_add(1));
+                if x > 0 {
+                    m = m.min(d[at(x - 1, y - 1)].saturating_add(1));
+                }
+                if x + 1 < w {
+                    m = m.min(d[at(x + 1, y - 1)].saturating_add(1));
+                }
+            }
+            d[at(x, y)] = m;
+        }
+    }
+    for y in (0..h).rev() {
+        for x in (0..w).rev() {
+            let mut m = d[at(x, y)];
+            if x + 1 < w {
+                m = m.min(d[at(x + 1, y)].saturating_add(1));
+            }
+            if y + 1 < h {
+                m = m.min(d[at(x, y + 1)].saturating_add(1));
+                if x + 1 < w {
+                    m = m.min(d[at(x + 1, y + 1)].saturating_add(1));
+                }
+                if x > 0 {
+                    m = m.min(d[at(x - 1, y + 1)].saturating_add(1));
+                }
+            }
+            d[at(x, y)] = m;
+        }
+    }
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn image_with(w: u32, h: u32, lit: &[(u32, u32)]) -> LuminanceImage {
+        let mut img = LuminanceImage::zeros(w, h);
+        for &(c, r) in lit {
+            img.data[(r * w + c) as usize] = 100.0;
+        }
+        img
+    }
+
+    #[test]
+    fn dark_squares_are_exactly_those_without_a_lit_pixel_centre() {
+        let img = image_with(200, 150, &[(50, 40), (51, 40), (120, 100)]);
+        let m = LitMask::of(&img, 1e-3).unwrap();
+        assert_eq!(m.lit_pixels, 3);
+        // Brute force over many squares, small (exact path) and large (coarse path: may say "not
+        // dark" where it is, never "dark" where it is not).
+        let mut exact_agree = 0;
+        for (i, &(u, v, r)) in [
+            (50.5, 40.5, 0.4),
+            (53.0, 40.5, 1.4),
+            (53.0, 40.5, 1.6),
+            (10.0, 10.0, 5.0),
+            (60.0, 60.0, 30.0),
+            (100.0, 75.0, 60.0),
+            (120.5, 100.5, 0.1),
+            (118.0, 98.0, 2.0),
+            (150.0, 60.0, 40.0),
+        ]
+        .iter()
+        .enumerate()
+        {
+            let truth = ![(50u32, 40u32), (51, 40), (120, 100)].iter().any(|&(c, rr)| {
+                let (x, y) = (f64::from(c) + 0.5, f64::from(rr) + 0.5);
+                (x - u).abs() <= r && (y - v).abs() <= r
+            });
+            let got = m.dark(u, v, r).unwrap();
+            assert!(!got || truth, "square {i} called dark but holds a lit pixel");
+            if 2.0 * r <= EXACT_ROWS as f64 - 2.0 {
+                assert_eq!(got, truth, "square {i}");
+                exact_agree += 1;
+            }
+        }
+        assert!(exact_agree >= 5);
+        // Far from light, the coarse map says dark.
+        assert_eq!(m.dark(160.0, 30.0, 20.0), Some(true));
+        // Outside the frame: no answer.
+        assert_eq!(m.dark(5.0, 5.0, 6.0), None);
+        assert!(LitMask::of(&LuminanceImage::zeros(10, 10), 1e-3).is_none());
+        // Lit: only where every pixel around the square is.
+        let mut block = LuminanceImage::zeros(40, 40);
+        for r in 10..20 {
+            for c in 10..20 {
+                block.data[r * 40 + c] = 1.0;
+            }
+        }
+        let b = LitMask::of(&block, 1e-3).unwrap();
+        assert!(b.lit(15.0, 15.0, 3.0));
+        assert!(!b.lit(11.0, 15.0, 1.0));
+        assert!(!b.lit(25.0, 15.0, 1.0));
+        assert!(!b.lit(15.0, 15.0, 20.0));
+    }
+
+    #[test]
+    fn chessboard_distances() {
+        let mut lit = vec![false; 25];
+        lit[12] = true;
+        let d = chessboard(&lit, 5, 5);
+        assert_eq!(d[12], 0);
+        assert_eq!(d[0], 2);
+        assert_eq!(d[7], 1);
+        assert_eq!(chessboard(&[false; 4], 2, 2), vec![255; 4]);
+    }
+}

@@ -1,0 +1,462 @@
+//! From carved cells to triangles: naive surface nets on the cells' centres (one vertex per dual
+//! cube the surface crosses, at the mean of its crossed edges' midpoints; two triangles per crossed
+//! edge, wound outwards), then a few passes of Taubin smoothing that keep each vertex inside its
+//! dual cube (no shrinking, no vertex moves more than half a cell).
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use super::carve::Occupancy;
+use crate::nearfield::synth::proxy::{ProxyMesh, ProxySurface};
+
+/// A triangle mesh: vertices and index triples (m, luminaire frame).
+#[derive(Debug, Clone, Default)]
+pub struct Mesh {
+    /// Vertices (m).
+    pub vertices: Vec<DVec3>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl Mesh {
+    /// Three vertices per triangle, as f32 (the pack's proxy layout).
+    pub fn soup(&self) -> Vec<[f32; 3]> {
+        self.triangles
+            .iter()
+            .flat_map(|t| t.iter().map(|&i| self.vertices[i as usize].as_vec3().to_array()))
+            .collect()
+    }
+
+    /// Total area (m²).
+    pub fn area(&self) -> f64 {
+        self.triangles.iter().map(|t| tri_area(self.corners(t))).sum()
+    }
+
+    /// As a [`ProxyMesh`] (one surface, area-weighted vertex normals) for glTF export.
+    pub fn to_proxy_mesh(&self, name: &str, surface: &str) -> ProxyMesh {
+        let mut normals = vec![DVec3::ZERO; self.vertices.len()];
+        for t in &self.triangles {
+            let [a, b, c] = self.corners(t);
+            let n = (b - a).cross(c - a);
+            for &i in t {
+                normals[i as usize] += n;
+            }
+        }
+        let mut m = ProxyMesh::new(name);
+        m.surfaces.push(ProxySurface {
+            name: surface.to_string(),
+            positions: self.vertices.clone(),
+            normals: normals.into_iter().map(|n| n.normalize_or(DVec3::Z)).collect(),
+            indices: self.triangles.iter().flat_map(|t| t.iter().copied()).collect(),
+        });
+        m
+    }
+
+    fn corners(&self, t: &[u32; 3]) -> [DVec3; 3] {
+        t.map(|i| self.vertices[i as usize])
+    }
+}
+
+/// Area (m²) of a triangle.
+pub fn tri_area(t: [DVec3; 3]) -> f64 {
+    0.5 * (t[1] - t[0]).cross(t[2] - t[0]).length()
+}
+
+/// Smoothing passes (each a λ step then a μ step).
+const SMOOTHING_PASSES: usize = 4;
+
+/// The surface between occupied and empty cells (outside the grid counts as empty).
+pub fn surface_nets(occ: &Occupancy) -> Mesh {
+    let n = occ.n as i64;
+    let at = |x: i64, y: i64, z: i64| occ.at(x, y, z);
+    // Dual cube (x, y, z) spans cell centres x..x+1 etc., for x in −1..n.
+    let key = |x: i64, y: i64, z: i64| (((z + 1) * (n + 1) + (y + 1)) * (n + 1) + (x + 1)) as u64;
+    let mut index: HashMap<u64, u32> = HashMap::new();
+    let mut cube_of: Vec<[i64; 3]> = Vec::new();
+    let mut vertices: Vec<DVec3> = Vec::new();
+    let mut vertex = |x: i64, y: i64, z: i64, vertices: &mut Vec<DVec3>| -> u32 {
+        *index.entry(key(x, y, z)).or_insert_with(|| {
+            // Mean of the crossings of the cube's 12 edges.
+            let mut sum = DVec3::ZERO;
+            let mut k = 0.0;
+            for a in 0..3 {
+                for i in 0..2 {
+                    for j in 0..2 {
+                        let mut p = [0i64; 3];
+                        p[(a + 1) % 3] = i;
+                        p[(a + 2) % 3] = j;
+                        let mut q = p;
+                        q[a] = 1;
+                        if at(x + p[0], y + p[1], z + p[2]) != at(x + q[0], y + q[1], z + q[2]) {
+                            let mut m = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                            m[a] = 0.5;
+                            sum += m;
+                            k += 1.0;
+                        }
+                    }
+                }
+            }
+            let local = if k > 0.0 { sum / k } else { DVec3::splat(0.5) };
+            vertices.push(occ.origin + (DVec3::new(x as f64, y as f64, z as f64) + 0.5 + local) * occ.voxel_m);
+            cube_of.push([x, y, z]);
+            (vertices.len() - 1) as u32
+        })
+    };
+    let mut triangles = Vec::new();
+    for z in -1..n {
+        for y in -1..n {
+            for x in -1..n {
+                let here = at(x, y, z);
+                for a in 0..3 {
+                    let mut d = [0i64; 3];
+                    d[a] = 1;
+                    let there = at(x + d[0], y + d[1], z + d[2]);
+                    if here == there {
+                        continue;
+                    }
+                    // The four dual cubes around the edge (x,y,z)→(x,y,z)+e_a share it; they sit at
+                    // offsets 0/−1 along the two other axes.
+                    let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+                    let cube = |ob: i64, oc: i64| {
+                        let mut p = [x, y, z];
+                        p[b] += ob;
+                        p[c] += oc;
+                        p
+                    };
+                    let q = [cube(-1, -1), cube(0, -1), cube(0, 0), cube(-1, 0)];
+                    let v: Vec<u32> = q.iter().map(|p| vertex(p[0], p[1], p[2], &mut vertices)).collect();
+                    // Outward normal is +e_a when the inside is `here`.
+                    if here {
+                        triangles.push([v[0], v[1], v[2]]);
+                        triangles.push([v[0], v[2], v[3]]);
+                    } else {
+                        triangles.push([v[0], v[2], v[1]]);
+                        triangles.push([v[0], v[3], v[2]]);
+                    }
+                }
+            }
+        }
+    }
+    let mut mesh = Mesh { vertices, triangles };
+    smooth(&mut mesh, &cube_of, occ);
+    mesh
+}
+
+/// Taubin smoothing (λ = 0.5, μ = −0.53), each vertex clamped to its dual cube.
+fn smooth(mesh: &mut Mesh, cube_of: &[[i64; 3]], occ: &Occupancy) {
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if !neighbours[a as usize].contains(&b) {
+                neighbours[a as usize].push(b);
+                neighbours[b as usize].push(a);
+            }
+        }
+    }
+    let bounds: Vec<(DVec3, DVec3)> = cube_of
+        .iter()
+        .map(|&[x, y, z]| {
+            let lo = occ.origin + (DVec3::new(x as f64, y as f64, z as f64) + 0.5) * occ.voxel_m;
+            (lo, lo + DVec3::splat(occ.voxel_m))
+        })
+        .collect();
+    for _ in 0..SMOOTHING_PASSES {
+        for factor in [0.5, -0.53] {
+            let old = mesh.vertices.clone();
+            for (i, nb) in neighbours.iter().enumerate() {
+                if nb.is_empty() {
+                    continue;
+                }
+                let mean = nb.iter().map(|&j| old[j as usize]).sum::<DVec3>() / nb.len() as f64;
+                let p = old[i] + factor * (mean - old[i]);
+                mesh.vertices[i] = p.clamp(bounds[i].0, bounds[i].1);
+            }
+        }
+    }
+}
+
+/// Distances between two surfaces, sampled: points spread over each (by area, deterministic), each
+/// measured to the nearest triangle of the other.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Chamfer {
+    /// Mean distance (m) of the first mesh's samples to the second.
+    pub mean_ab_m: f64,
+    /// Mean distance (m) of the second mesh's samples to the first.
+    pub mean_ba_m: f64,
+    /// Mean over both directions (m): the symmetric Chamfer distance.
+    pub mean_m: f64,
+    /// 95th percentile over the samples of both directions (m).
+    pub p95_m: f64,
+    /// Largest sampled distance (m), both directions.
+    pub max_m: f64,
+}
+
+/// Samples about `samples` points on each of `a` and `b` (triangle soups, three vertices each) and
+/// measures [`Chamfer`].
+pub fn chamfer(a: &[[f32; 3]], b: &[[f32; 3]], samples: usize) -> Chamfer {
+    use rayon::prelude::*;
+    let ta = soup_triangles(a);
+    let tb = soup_triangles(b);
+    let (ga, gb) = (TriangleGrid::new(&ta), TriangleGrid::new(&tb));
+    let pa = sample(&ta, samples);
+    let pb = sample(&tb, samples);
+    let dab: Vec<f64> = pa.par_iter().map(|&p| gb.distance(p)).collect();
+    let dba: Vec<f64> = pb.par_iter().map(|&p| ga.distance(p)).collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let mut all: Vec<f64> = dab.iter().chain(&dba).copied().collect();
+    all.sort_by(f64::total_cmp);
+    let p95 = all
+        .get(((all.len() as f64 * 0.95) as usize).min(all.len().saturating_sub(1)))
+        .copied()
+        .unwrap_or(0.0);
+    let (mab, mba) = (mean(&dab), mean(&dba));
+    Chamfer {
+        mean_ab_m: mab,
+        mean_ba_m: mba,
+        mean_m: 0.5 * (mab + mba),
+        p95_m: p95,
+        max_m: all.last().copied().unwrap_or(0.0),
+    }
+}
+
+fn soup_triangles(s: &[[f32; 3]]) -> Vec<[DVec3; 3]> {
+    s.chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| DVec3::from(t[k].map(f64::from))))
+        .filter(|t| tri_area(*t) > 0.0)
+        .collect()
+}
+
+/// About `n` points spread over the triangles by area: each triangle gets its share (rounded
+/// stochastically with a fixed sequence), placed on a low-discrepancy (R2) sequence.
+fn sample(tris: &[[DVec3; 3]], n: usize) -> Vec<DVec3> {
+    let total: f64 = tris.iter().map(|t| tri_area(*t)).sum();
+    if total <= 0.0 {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(n + tris.len());
+    let mut carry = 0.0;
+    let (g1, g2) = (0.754_877_666_246_692_7, 0.569_840_290_998_053_2);
+    let mut seq = 0u64;
+    for t in tris {
+        carry += tri_area(*t) / total * n as f64;
+        while carry >= 1.0 {
+            carry -= 1.0;
+            seq += 1;
+            let (mut u, mut v) = ((0.5 + g1 * seq as f64).fract(), (0.5 + g2 * seq as f64).fract());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            out.push(t[0] + u * (t[1] - t[0]) + v * (t[2] - t[0]));
+        }
+    }
+    out
+}
+
+/// A bounding-volume hierarchy over triangles for nearest-triangle queries (median splits on the
+/// longest axis, leaves of up to four triangles, best-first search pruned by box distance).
+struct TriangleGrid<'t> {
+    tris: &'t [[DVec3; 3]],
+    /// Nodes: box, then (first child, 0) for inner nodes or (first triangle, count) for leaves.
+    nodes: Vec<(DVec3, DVec3, u32, u32)>,
+    order: Vec<u32>,
+}
+
+impl<'t> TriangleGrid<'t> {
+    fn new(tris: &'t [[DVec3; 3]]) -> Self {
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let centroid = |i: u32| {
+            let t = &tris[i as usize];
+            (t[0] + t[1] + t[2]) / 3.0
+        };
+        let mut nodes = Vec::with_capacity(2 * tris.len() / 4 + 1);
+        // (node index, range) to fill.
+        nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+        let mut stack = vec![(0usize, 0usize, tris.len())];
+        while let Some((node, lo, hi)) = stack.pop() {
+            let (mut bmin, mut bmax) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for &i in &order[lo..hi] {
+                for p in &tris[i as usize] {
+                    bmin = bmin.min(*p);
+                    bmax = bmax.max(*p);
+                }
+            }
+            if hi - lo <= 4 {
+                nodes[node] = (bmin, bmax, lo as u32, (hi - lo) as u32);
+                continue;
+            }
+            let ext = bmax - bmin;
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = (lo + hi) / 2;
+            order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+            let first = nodes.len();
+            nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+            nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+            nodes[node] = (bmin, bmax, first as u32, 0);
+            stack.push((first, lo, mid));
+            stack.push((first + 1, mid, hi));
+        }
+        Self { tris, nodes, order }
+    }
+
+    /// Distance (m) from `p` to the nearest triangle (∞ when there is none).
+    fn distance(&self, p: DVec3) -> f64 {
+        if self.tris.is_empty() {
+            return f64::INFINITY;
+        }
+        let box_d2 = |n: usize| {
+            let (lo, hi, _, _) = self.nodes[n];
+            let d = (lo - p).max(p - hi).max(DVec3::ZERO);
+            d.length_squared()
+        };
+        let mut best = f64::INFINITY;
+        let mut stack = vec![(0usize, box_d2(0))];
+        while let Some((n, d2)) = stack.pop() {
+            if d2 >= best * best {
+                continue;
+            }
+            let (_, _, a, count) = self.nodes[n];
+            if count > 0 {
+                for &i in &self.order[a as usize..(a + count) as usize] {
+                    best = best.min(point_triangle_distance(p, &self.tris[i as usize]));
+                }
+            } else {
+                let (l, r) = (a as usize, a as usize + 1);
+                let (dl, dr) = (box_d2(l), box_d2(r));
+                // Nearer child last, so it is searched first.
+                if dl < dr {
+                    stack.push((r, dr));
+                    stack.push((l, dl));
+                } else {
+                    stack.push((l, dl));
+                    stack.push((r, dr));
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Distance from `p` to triangle `t` (Ericson, Real-Time Collision Detection, 5.1.5).
+pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
+    let [a, b, c] = *t;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (p - a).length();
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (p - b).length();
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (p - (a + v * ab)).length();
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (p - c).length();
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (p - (a + w * ac)).length();
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (p - (b + w * (c - b))).length();
+    }
+    let denom = 1.0 / (va + vb + vc);
+    let (v, w) = (vb * denom, vc * denom);
+    (p - (a + ab * v + ac * w)).length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ball(n: usize, r_cells: f64) -> Occupancy {
+        let mut cells = vec![false; n * n * n];
+        let c = n as f64 / 2.0;
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let p = DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) - c;
+                    cells[(z * n + y) * n + x] = p.length() <= r_cells;
+                }
+            }
+        }
+        Occupancy {
+            origin: DVec3::ZERO,
+            voxel_m: 1.0 / n as f64,
+            n,
+            cells,
+            tests: 0,
+        }
+    }
+
+    #[test]
+    fn a_voxel_ball_becomes_a_closed_sphere_of_its_radius() {
+        let occ = ball(32, 10.0);
+        let m = surface_nets(&occ);
+        // Closed: every edge is shared by exactly two triangles, opposite ways.
+        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &m.triangles {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        assert!(edges
+            .iter()
+            .all(|(&(a, b), &c)| c == 1 && edges.get(&(b, a)) == Some(&1)));
+        // Outward: the signed volume is positive and close to the ball's.
+        let vol: f64 = m
+            .triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.vertices[i as usize] - DVec3::splat(0.5));
+                a.dot(b.cross(c)) / 6.0
+            })
+            .sum();
+        let r = 10.0 / 32.0;
+        let exact = 4.0 / 3.0 * std::f64::consts::PI * r * r * r;
+        assert!((vol / exact - 1.0).abs() < 0.08, "volume {vol} vs {exact}");
+        // Every vertex within half a cell of the sphere.
+        for v in &m.vertices {
+            assert!(((*v - DVec3::splat(0.5)).length() - r).abs() < 0.75 / 32.0, "{v}");
+        }
+    }
+
+    #[test]
+    fn chamfer_of_a_shifted_square_is_the_shift() {
+        let sq = |z: f32| -> Vec<[f32; 3]> {
+            vec![
+                [0.0, 0.0, z],
+                [1.0, 0.0, z],
+                [1.0, 1.0, z],
+                [0.0, 0.0, z],
+                [1.0, 1.0, z],
+                [0.0, 1.0, z],
+            ]
+        };
+        let c = chamfer(&sq(0.0), &sq(0.01), 5000);
+        assert!((c.mean_m - 0.01).abs() < 1e-6 && (c.p95_m - 0.01).abs() < 1e-6, "{c:?}");
+        let same = chamfer(&sq(0.0), &sq(0.0), 1000);
+        assert!(same.max_m < 1e-9);
+        // A point far off: distance is exact.
+        let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        assert!((point_triangle_distance(DVec3::new(0.2, 0.2, 3.0), &t) - 3.0).abs() < 1e-12);
+        assert!((point_triangle_distance(DVec3::new(-1.0, 0.0, 0.0), &t) - 1.0).abs() < 1e-12);
+    }
+}
