@@ -199,7 +199,7 @@ pub fn chamfer(a: &[[f32; 3]], b: &[[f32; 3]], samples: usize) -> Chamfer {
     use rayon::prelude::*;
     let ta = soup_triangles(a);
     let tb = soup_triangles(b);
-    let (ga, gb) = (TriangleGrid::new(&ta), TriangleGrid::new(&tb));
+    let (ga, gb) = (TriangleBvh::new(&ta), TriangleBvh::new(&tb));
     let pa = sample(&ta, samples);
     let pb = sample(&tb, samples);
     let dab: Vec<f64> = pa.par_iter().map(|&p| gb.distance(p)).collect();
@@ -256,14 +256,14 @@ fn sample(tris: &[[DVec3; 3]], n: usize) -> Vec<DVec3> {
 
 /// A bounding-volume hierarchy over triangles for nearest-triangle queries (median splits on the
 /// longest axis, leaves of up to four triangles, best-first search pruned by box distance).
-struct TriangleGrid<'t> {
+struct TriangleBvh<'t> {
     tris: &'t [[DVec3; 3]],
     /// Nodes: box, then (first child, 0) for inner nodes or (first triangle, count) for leaves.
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     order: Vec<u32>,
 }
 
-impl<'t> TriangleGrid<'t> {
+impl<'t> TriangleBvh<'t> {
     fn new(tris: &'t [[DVec3; 3]]) -> Self {
         let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let centroid = |i: u32| {

@@ -248,14 +248,9 @@ pub fn spread_cameras(set: &RayImageSet, max: usize) -> Vec<usize> {
         .iter()
         .map(|c| c.direction_from(set.sphere.centre_m))
         .collect();
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let mut picked: Vec<usize> = (0..max)
+    let mut picked: Vec<usize> = crate::nearfield::raykde::bandwidth::fibonacci(max)
         .into_par_iter()
-        .map(|k| {
-            let z = 1.0 - 2.0 * (k as f64 + 0.5) / max as f64;
-            let r = (1.0 - z * z).sqrt();
-            let phi = golden * k as f64;
-            let p = DVec3::new(r * phi.cos(), r * phi.sin(), z);
+        .map(|p| {
             let mut best = (f64::NEG_INFINITY, 0usize);
             for (i, d) in dirs.iter().enumerate() {
                 let c = d.dot(p);
