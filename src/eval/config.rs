@@ -109,6 +109,9 @@ pub struct EvalConfig {
     /// View pixels across the smallest feature; `None`: the contract's [`feature_px`] (views are at
     /// most the smallest feature / this apart).
     pub feature_view_px: Option<f64>,
+    /// Also render continuous selection with the proxy reconstructed from the scan (docs/proxy.md),
+    /// reported as `continuous+rec-proxy`.
+    pub reconstructed_proxy: bool,
 }
 
 impl Default for EvalConfig {
@@ -132,6 +135,7 @@ impl Default for EvalConfig {
             images_dir: None,
             capture_samples: 1,
             feature_view_px: None,
+            reconstructed_proxy: false,
         }
     }
 }

@@ -9,7 +9,7 @@ use glam::{DVec3, Mat4};
 
 use super::config::{EvalConfig, EvalMode};
 use super::metrics::{self, aggregate, compare_view_with_margin, ViewMetrics};
-use super::prepare::{prepare, Prepared};
+use super::prepare::{prepare, reconstructed_proxy, Prepared};
 use super::references::{references, OrthoReferences, Referenced, References};
 use super::render::{ortho_intensity, render_view};
 use super::report::{write_triptych, LuminaireReport, ModeReport};
@@ -41,10 +41,42 @@ pub fn evaluate(
     let result = evaluate_loaded(r, inst, &p, cfg, progress);
     r.remove_luminaire(id)?;
     let Loaded {
-        modes,
+        mut modes,
         quadrature_flux_error: quad,
         mut notes,
+        refs,
     } = result?;
+    if cfg.reconstructed_proxy {
+        // The proxy a user gets without a mesh, rendered as the contract's mode renders the true one
+        // (or, where none is kept, without a proxy: what the user then sees).
+        let (tris, warnings) = reconstructed_proxy(&p, progress)?;
+        notes.extend(warnings);
+        let kept = tris.is_some();
+        let id = r.add_pack(p.pack.clone(), tris, &opts)?;
+        let inst = r.add_instance(id, Mat4::IDENTITY)?;
+        let mut gpu = Rendering {
+            r,
+            inst,
+            targets: Vec::new(),
+        };
+        let mode = if kept {
+            EvalMode::CONTINUOUS_PROXY
+        } else {
+            EvalMode {
+                proxy: false,
+                ..EvalMode::CONTINUOUS_PROXY
+            }
+        };
+        let result = evaluate_mode(&mut gpu, mode, &p, cfg, &refs, progress);
+        drop(gpu);
+        r.remove_luminaire(id)?;
+        let mut report = result?;
+        report.mode = RECONSTRUCTED_LABEL.into();
+        if !kept {
+            notes.push(format!("{RECONSTRUCTED_LABEL}: no proxy kept, rendered without one"));
+        }
+        modes.push(report);
+    }
     notes.extend(p.notes.iter().cloned());
     Ok(LuminaireReport {
         name: name.into(),
@@ -58,11 +90,16 @@ pub fn evaluate(
     })
 }
 
-/// What [`evaluate_loaded`] measured: every mode's report, the reference flux's own error, notes.
+/// The label of continuous selection with the proxy reconstructed from the scan.
+pub const RECONSTRUCTED_LABEL: &str = "continuous+rec-proxy";
+
+/// What [`evaluate_loaded`] measured: every mode's report, the reference flux's own error, notes,
+/// and the references (for a further mode).
 struct Loaded {
     modes: Vec<ModeReport>,
     quadrature_flux_error: f64,
     notes: Vec<String>,
+    refs: References,
 }
 
 /// Measures the luminaire `p`, loaded on the GPU as instance `inst` of `r`: its references first,
@@ -87,7 +124,8 @@ fn evaluate_loaded(
     Ok(Loaded {
         modes: reports,
         quadrature_flux_error: refs.ortho.quadrature_flux_error,
-        notes: refs.notes,
+        notes: refs.notes.clone(),
+        refs,
     })
 }
 

@@ -139,3 +139,45 @@ pub(super) fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> 
         notes,
     })
 }
+
+/// Side (px) of the captures a reconstructed proxy is made from: the scan's cameras rendered again at
+/// most this large, with 3 × 3 rays per pixel as a sensor integrates (docs/proxy.md).
+const RECONSTRUCT_PX: f64 = 256.0;
+
+/// `k` scaled to at most [`RECONSTRUCT_PX`] on its longer side (the same field of view).
+fn reconstruct_intrinsics(k: &Intrinsics) -> Intrinsics {
+    let s = (RECONSTRUCT_PX / f64::from(k.width.max(k.height))).min(1.0);
+    Intrinsics {
+        width: ((f64::from(k.width) * s).round() as u32).max(1),
+        height: ((f64::from(k.height) * s).round() as u32).max(1),
+        principal_px: k.principal_px * s,
+        focal_px: k.focal_px * s,
+    }
+}
+
+/// A reconstructed proxy's triangles (`None` when none is kept) and the warnings saying why.
+pub(super) type ReconstructedProxy = (Option<Vec<[f32; 3]>>, Vec<String>);
+
+/// The proxy `lumiview pack --synth` would store for `p`'s scan: reconstructed from its cameras
+/// ([`crate::nearfield::reconstruct::scan_proxy`]), as triangles; `None` with the warnings when
+/// none is kept.
+pub(super) fn reconstructed_proxy(p: &Prepared, progress: &dyn Fn(&str)) -> Result<ReconstructedProxy, EvalError> {
+    let mut set = p.pack.rayset().clone();
+    set.intrinsics = reconstruct_intrinsics(&set.intrinsics);
+    for c in &mut set.cameras {
+        c.intrinsics = c.intrinsics.as_ref().map(reconstruct_intrinsics);
+    }
+    progress(&format!(
+        "{}: reconstructing the proxy from {} cameras",
+        p.lum.name(),
+        set.cameras.len()
+    ));
+    let source = SynthSource::new(p.lum.clone(), set.clone(), 3)?;
+    let scan = Scan {
+        set,
+        source: Box::new(source),
+    };
+    let mut warnings = Vec::new();
+    let rec = crate::nearfield::reconstruct::scan_proxy(&scan, p.lum.name(), &|_, _, _| {}, &mut warnings)?;
+    Ok((rec.map(|r| r.mesh.soup()), warnings))
+}

@@ -26,6 +26,25 @@ pub fn triangles_of(mesh: &ProxyMesh) -> Vec<[f32; 3]> {
     out
 }
 
+/// A triangle soup (luminaire frame, metres, three vertices per triangle) as a one-surface
+/// [`ProxyMesh`] with face normals, for glTF export.
+pub fn mesh_of_triangles(name: &str, surface: &str, triangles: &[[f32; 3]]) -> ProxyMesh {
+    let mut s = super::synth::proxy::ProxySurface {
+        name: surface.to_string(),
+        ..Default::default()
+    };
+    for (t, tri) in triangles.chunks_exact(3).enumerate() {
+        let [a, b, c] = [0, 1, 2].map(|k| DVec3::from(tri[k].map(f64::from)));
+        let n = (b - a).cross(c - a).normalize_or(DVec3::Z);
+        s.positions.extend([a, b, c]);
+        s.normals.extend([n; 3]);
+        s.indices.extend((0..3).map(|k| (3 * t + k) as u32));
+    }
+    let mut m = ProxyMesh::new(name);
+    m.surfaces.push(s);
+    m
+}
+
 /// Largest glTF file (and each buffer file it names) read as a proxy: 1 GiB.
 pub const MAX_GLTF_BYTES: u64 = 1 << 30;
 

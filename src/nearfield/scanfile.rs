@@ -55,7 +55,8 @@ const SNIFF_BYTES: usize = 4096;
 
 /// Cache format: part of every key, so a change of the defaults below invalidates old entries.
 const CACHE_VERSION: &str =
-    "lumiview scan cache 2: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict";
+    "lumiview scan cache 3: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict with a \
+     reconstructed proxy v1";
 
 /// Reads the first bytes of `path` and says which kind of scan file it is, or `None` for anything
 /// else (photometry, garbage).
@@ -141,7 +142,11 @@ pub fn scan_from_file_with_warnings(
                 verify_pixels: false,
             };
             let scan = load_scan(&[path.to_path_buf()], &opts)?;
-            Ok((scan, format!("scan manifest {}", path.display()), None))
+            // No mesh comes with a manifest: the proxy is reconstructed from the images.
+            let what = format!("scan manifest {}", path.display());
+            let proxy = crate::nearfield::reconstruct::scan_proxy(&scan, &what, &|_, _, _| {}, warnings)?
+                .map(|rec| rec.to_pack_proxy());
+            Ok((scan, what, proxy))
         }
         ScanFileKind::RayFile => {
             let rays = RayFile::read(path)?;

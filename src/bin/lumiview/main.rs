@@ -112,6 +112,10 @@ enum Command {
     /// scale within 0.05 %, pages ≤ 128 MiB): from scan manifests, --synth, a TM-25 ray file or
     /// another .lvpack.
     Pack(commands::PackArgs),
+    /// The proxy mesh a scan renders with when it comes without one, reconstructed from its images
+    /// (space carving; docs/proxy.md), written as .glb; --synth measures the reconstruction of
+    /// synthetic luminaires against their true proxies (Chamfer table).
+    Proxy(commands::ProxyArgs),
     /// Near-field quality harness: synthetic luminaires scanned, packed and rendered on the GPU in
     /// each selection mode, compared with the exact ray-caster (docs/quality-metrics.md); prints the
     /// table and writes the worst views as images.
@@ -163,6 +167,7 @@ fn main() -> ExitCode {
         Command::Rays2scan(args) => commands::rays2scan(&args),
         Command::Synth(args) => commands::synth(&args),
         Command::Pack(args) => commands::pack(&args),
+        Command::Proxy(args) => commands::proxy(&args),
         Command::Eval(args) => commands::eval(&args),
         Command::EvalRays(args) => commands::eval_rays(&args),
     };

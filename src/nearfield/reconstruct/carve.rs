@@ -1,7 +1,9 @@
 //! Space carving on an octree: a cube of space holds no luminous surface when some camera that sees
-//! all of it sees only darkness there. Cubes start at 8 per axis over the content box and are split
-//! until the finest level; a cube every camera sees wholly lit is kept with all its descendants
-//! without further tests, so work grows with the surface, not the volume.
+//! all of it sees only darkness there, unless (at the finest level) the dark cameras may be seeing
+//! the back of a one-sided emitter the lit ones see the front of. Cubes start at 8 per axis over
+//! the content box and are split until the finest level; a cube every camera sees wholly lit is
+//! kept with all its descendants without further tests, so work grows with the surface, not the
+//! volume.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -124,30 +126,70 @@ fn screen(views: &[View], c: DVec3, h: f64) -> (Option<bool>, u64) {
 }
 
 /// A finest cube: kept when no camera sees it all dark, or when some camera sees it wholly lit and
-/// some plane through it has every camera that sees it wholly lit in front and every camera that
+/// a plane through it has every camera that sees it wholly lit in front and every camera that
 /// sees it dark behind ([`in_open_hemisphere`]): it may hold a one-sided emitter whose back those
-/// dark cameras see.
-fn decide(views: &[View], c: DVec3, h: f64) -> (Option<bool>, u64) {
-    let mut dirs = Vec::new();
-    let (mut dark, mut light) = (0usize, 0usize);
-    for v in views {
+/// dark cameras see. Dark cameras within `grazing` (sine of the angle) of the plane across the mean
+/// lit direction are not counted: a surface seen that obliquely covers less than a pixel, and a
+/// camera that samples points (not areas) can miss it.
+///
+/// `views` should be ordered so that every prefix is spread over the sphere: the test stops at the
+/// first checkpoint (32, 64, 128, … views) where the evidence already rules the cube out.
+fn decide(views: &[View], c: DVec3, h: f64, grazing: f64) -> (Option<bool>, u64) {
+    let mut lit: Vec<DVec3> = Vec::new();
+    let mut dark: Vec<DVec3> = Vec::new();
+    let mut checkpoint = 32usize;
+    for (k, v) in views.iter().enumerate() {
         let towards = (v.camera.position_m - c).normalize_or_zero();
         match v.judge(c, h) {
-            Verdict::Dark => {
-                dark += 1;
-                dirs.push(-towards);
-            }
-            Verdict::Lit => {
-                light += 1;
-                dirs.push(towards);
-            }
+            Verdict::Dark => dark.push(towards),
+            Verdict::Lit => lit.push(towards),
             // A footprint only partly lit proves nothing: beside a silhouette, a grazing camera sees
             // the light behind the cube along its whole line of sight.
             Verdict::Mixed | Verdict::Unseen => {}
         }
+        if k + 1 == checkpoint && k + 1 < views.len() {
+            checkpoint *= 2;
+            if !dark.is_empty() && !one_sided(&lit, &dark, grazing) {
+                return (Some(false), k as u64 + 1);
+            }
+        }
     }
-    let keep = dark == 0 || (light > 0 && in_open_hemisphere(&dirs));
+    let keep = dark.is_empty() || one_sided(&lit, &dark, grazing);
     (Some(keep), views.len() as u64)
+}
+
+/// Whether the cameras that see a cube lit (`lit`, directions towards them) and those that see it
+/// dark (`dark`) fit one emitter facing a half-space, not counting dark cameras within `grazing`
+/// (sine) of the plane across the mean lit direction.
+fn one_sided(lit: &[DVec3], dark: &[DVec3], grazing: f64) -> bool {
+    if lit.is_empty() {
+        return false;
+    }
+    let mean = lit.iter().copied().sum::<DVec3>().normalize_or_zero();
+    let mut dirs: Vec<DVec3> = lit.to_vec();
+    dirs.extend(dark.iter().filter(|d| d.dot(mean).abs() >= grazing).map(|d| -*d));
+    in_open_hemisphere(&dirs)
+}
+
+/// `0..n` in an order whose every prefix is spread over the index range (a multiplicative stride
+/// coprime with `n`), so that a view order sorted by direction becomes spread.
+pub fn spread_order(n: usize) -> Vec<usize> {
+    if n < 3 {
+        return (0..n).collect();
+    }
+    // Near n / golden ratio, coprime with n.
+    let mut stride = ((n as f64) * 0.618_033_988_75).round() as usize;
+    while gcd(stride, n) != 1 {
+        stride += 1;
+    }
+    (0..n).map(|i| i * stride % n).collect()
+}
+
+fn gcd(mut a: usize, mut b: usize) -> usize {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
 }
 
 /// Cells per axis at the coarsest level.
@@ -162,6 +204,7 @@ pub fn carve(
     half_m: f64,
     content_m: f64,
     levels: u32,
+    grazing: f64,
     progress: &(dyn Fn(u32, u32) + Sync),
 ) -> Occupancy {
     let n = BASE_CELLS << levels;
@@ -189,7 +232,7 @@ pub fn carve(
                     return ([x, y, z], Some(false), 0);
                 }
                 let (verdict, k) = if finest {
-                    decide(views, c, h)
+                    decide(views, c, h, grazing)
                 } else {
                     screen(views, c, h)
                 };

@@ -34,7 +34,7 @@ pub struct LitMask {
 
 impl LitMask {
     /// The pixels of `img` at or above `relative · max` (and above 0), where max is the image's
-    /// largest value; `None` when the image holds no light at all.
+    /// largest value (every pixel dark when that is 0); `None` when the image is wider than 65535 px.
     pub fn of(img: &LuminanceImage, relative: f32) -> Option<Self> {
         let (w, h) = (img.width, img.height);
         let max = img
@@ -43,8 +43,11 @@ impl LitMask {
             .copied()
             .filter(|v| v.is_finite())
             .fold(0.0f32, f32::max);
-        if max <= 0.0 || w > u32::from(u16::MAX) {
+        if w > u32::from(u16::MAX) {
             return None;
+        }
+        if max <= 0.0 {
+            return Some(Self::unlit(w, h));
         }
         let floor = (relative * max).max(f32::MIN_POSITIVE);
         let (cw, ch) = (w.div_ceil(COARSE_PX), h.div_ceil(COARSE_PX));
@@ -87,6 +90,23 @@ impl LitMask {
         })
     }
 
+    /// A `width` × `height` image with no lit pixel (a camera that sees no light: every square is
+    /// dark).
+    pub fn unlit(width: u32, height: u32) -> Self {
+        let (cw, ch) = (width.div_ceil(COARSE_PX), height.div_ceil(COARSE_PX));
+        Self {
+            width,
+            height,
+            row_start: vec![0; height as usize + 1],
+            runs: Vec::new(),
+            cw,
+            ch,
+            dist: vec![255; (cw * ch) as usize],
+            lit_pixels: 0,
+            max_cd_m2: 0.0,
+        }
+    }
+
     /// Image width and height (px).
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
@@ -106,6 +126,25 @@ impl LitMask {
         Some([f64::from(c0), f64::from(c1), first as f64, (last + 1) as f64])
     }
 
+    /// Centres (pixel coordinates) of up to `max` lit pixels, spread evenly over them in raster
+    /// order.
+    pub fn lit_centres(&self, max: usize) -> Vec<(f64, f64)> {
+        let step = (self.lit_pixels as usize).div_ceil(max.max(1)).max(1);
+        let mut out = Vec::new();
+        let mut k = 0usize;
+        for r in 0..self.height as usize {
+            for &(s, e) in &self.runs[self.row_start[r] as usize..self.row_start[r + 1] as usize] {
+                for c in s..e {
+                    if k.is_multiple_of(step) {
+                        out.push((f64::from(c) + 0.5, r as f64 + 0.5));
+                    }
+                    k += 1;
+                }
+            }
+        }
+        out
+    }
+
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.row_start.len() * 4 + self.runs.len() * 4 + self.dist.len()
@@ -120,10 +159,15 @@ impl LitMask {
             return None;
         }
         // Pixels whose centres (c + 0.5) fall in [x0, x1].
-        let (c0, c1) = ((x0 - 0.5).ceil() as i64, (x1 - 0.5).floor() as i64);
-        let (r0, r1) = ((y0 - 0.5).ceil() as i64, (y1 - 0.5).floor() as i64);
+        let (mut c0, mut c1) = ((x0 - 0.5).ceil() as i64, (x1 - 0.5).floor() as i64);
+        let (mut r0, mut r1) = ((y0 - 0.5).ceil() as i64, (y1 - 0.5).floor() as i64);
         if c1 < c0 || r1 < r0 {
-            return Some(true);
+            // Smaller than a pixel and between centres: the pixels it overlaps decide (a square
+            // between samples is not known to be dark).
+            (c0, c1) = (x0.floor() as i64, (x1.ceil() as i64 - 1).max(x0.floor() as i64));
+            (r0, r1) = (y0.floor() as i64, (y1.ceil() as i64 - 1).max(y0.floor() as i64));
+            c1 = c1.min(i64::from(self.width) - 1);
+            r1 = r1.min(i64::from(self.height) - 1);
         }
         if r1 - r0 < EXACT_ROWS {
             return Some(self.rows_dark(c0, c1, r0, r1));
@@ -270,7 +314,25 @@ mod tests {
         assert_eq!(m.dark(160.0, 30.0, 20.0), Some(true));
         // Outside the frame: no answer.
         assert_eq!(m.dark(5.0, 5.0, 6.0), None);
-        assert!(LitMask::of(&LuminanceImage::zeros(10, 10), 1e-3).is_none());
+        // A square smaller than a pixel between pixel centres: the pixels it overlaps decide.
+        let mut one = LuminanceImage::zeros(16, 16);
+        one.data[5 * 16 + 5] = 1.0;
+        let m1 = LitMask::of(&one, 1e-3).unwrap();
+        assert_eq!(
+            m1.dark(5.9, 5.9, 0.05),
+            Some(false),
+            "inside the lit pixel, no centre in the square"
+        );
+        assert_eq!(
+            m1.dark(6.0, 6.0, 0.05),
+            Some(false),
+            "on the corner it shares with the lit pixel"
+        );
+        assert_eq!(m1.dark(6.2, 6.2, 0.05), Some(true), "inside the dark pixel beside it");
+        let none = LitMask::of(&LuminanceImage::zeros(16, 16), 1e-3).unwrap();
+        assert_eq!((none.lit_pixels, none.lit_box()), (0, None));
+        assert_eq!(none.dark(8.0, 8.0, 7.0), Some(true));
+        assert!(!none.lit(8.0, 8.0, 1.0));
         // Lit: only where every pixel around the square is.
         let mut block = LuminanceImage::zeros(40, 40);
         for r in 10..20 {

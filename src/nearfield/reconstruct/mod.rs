@@ -1,32 +1,39 @@
 //! The proxy from the scan itself: the luminous surfaces recovered from the capture images and
 //! their poses, as a triangle mesh for parallax-correct rendering.
 //!
-//! **Status: under development (issue 17); nothing in `pack`, `render` or the C API calls it yet.**
-//! The masks, the octree, the mesh and the Chamfer measure are tested; the carving rule is not yet
-//! right for one-sided emitters. Measured on synthetic scans (rigo:300 per hemisphere, 256 × 256 px,
-//! 1024 cameras at most): a dark camera behind a one-sided emitter carves it away under the plain
-//! visual-hull rule (`two-planes` lost its front tiles; `led-dots` vanished: point-sampled dots are
-//! missed by grazing cameras), and the one-sided rule in [`carve`] keeps a rim of cells that only
-//! grazing cameras see (Chamfer p95 15 % of the diameter for `disc`) and costs minutes.
+//! **Status (issue 17, in progress):** `lumiview pack` (manifests, `--synth`) and the loaders of
+//! `render` and `lumi_luminaire_load` (manifests) store it as the pack's proxy through
+//! [`scan_proxy`]; `lumiview proxy` writes it as glTF and measures it (docs/proxy.md). Measured on
+//! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 within 1 % of the
+//! bounding diameter for `two-planes` and `rect`, 1.1–1.2 % for `disc`, `star-panel` and `cos1`;
+//! nothing survives for `strips`, `led-dots`, `cos10`, `cos100`, `reflector` and `peak` (small
+//! features seen edge-on, beams narrower than the camera spacing, a mirror): those scans render
+//! without a proxy, with a warning.
 //!
 //! 1. **Cameras**: up to [`ReconstructOptions::max_cameras`], spread evenly over the directions of
 //!    the scan's cameras (the one nearest each point of a Fibonacci sphere).
 //! 2. **Masks** ([`mask`]): each image's lit pixels (at or above
 //!    [`ReconstructOptions::lit_relative`] of its own maximum), kept as runs per row plus a coarse
 //!    distance map. Cameras whose brightest pixel is below [`ReconstructOptions::camera_relative`]
-//!    of the brightest camera's see the back of the source or nothing: they carry no evidence and
-//!    are left out (a dark camera cannot tell "empty" from "not emitting this way").
+//!    of the brightest camera's see the back of the source or nothing: every pixel of theirs counts
+//!    as dark.
 //! 3. **Carving** ([`carve`]): the content ball (where any camera saw light) in a cube, split as an
 //!    octree down to cells of about one capture pixel's footprint (at most
-//!    [`ReconstructOptions::max_cells`] per axis); a cell is empty when one camera that sees all of it
-//!    sees only darkness there. What survives is the lit visual hull: the intersection of the
-//!    cones of light every informative camera saw.
+//!    [`ReconstructOptions::max_cells`] per axis). A coarse cell is empty when a camera that sees all
+//!    of it sees only darkness there and none sees light in it; a finest cell survives when no camera
+//!    sees it dark, or when the cameras that see it lit and those that see it dark fit one emitter
+//!    facing a half-space (the dark ones see its back; dark cameras within
+//!    [`ReconstructOptions::grazing_deg`] of its plane are not counted).
 //! 4. **Mesh** ([`mesh`]): naive surface nets over the surviving cells, Taubin-smoothed within each
 //!    cell.
+//! 5. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
+//!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
+//!    light it misses).
 //!
-//! The hull encloses the light (it is a bound, not the surface itself): concave or layered sources
-//! are filled in. Pure CPU, both cores (rayon); memory is the masks (a few tens of KB per camera)
-//! plus one byte per finest cell.
+//! Without luminance consistency (not yet done) a flat emitter comes out as a thin lens whose
+//! thickness the most grazing cameras set, and what is hidden behind a lit surface from every
+//! camera is filled in. Pure CPU, both cores (rayon); memory is the masks (a few tens of KB per
+//! camera) plus one byte per finest cell.
 
 pub mod carve;
 pub mod hemisphere;
@@ -39,7 +46,8 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::nearfield::error::{NearfieldError, Result};
-use crate::nearfield::rayset::{LuminanceImage, RayImageSet};
+use crate::nearfield::pack::PackProxy;
+use crate::nearfield::rayset::{LuminanceImage, RayImageSet, Scan};
 
 pub use carve::{Occupancy, View};
 pub use mask::LitMask;
@@ -57,6 +65,9 @@ pub struct ReconstructOptions {
     /// A camera is used when its maximum is at least this fraction of the brightest camera's;
     /// default 1e-6.
     pub camera_relative: f32,
+    /// Dark cameras within this angle (degrees) of a surface's plane do not carve it (a camera that
+    /// samples points can miss a surface seen that obliquely); default 3.
+    pub grazing_deg: f64,
 }
 
 impl Default for ReconstructOptions {
@@ -66,6 +77,7 @@ impl Default for ReconstructOptions {
             max_cells: 256,
             lit_relative: 1e-4,
             camera_relative: 1e-6,
+            grazing_deg: 1.0,
         }
     }
 }
@@ -93,6 +105,12 @@ impl ReconstructOptions {
                 return Err(NearfieldError::invalid(name, format!("{v} is outside (0, 1)")));
             }
         }
+        if !(0.0..45.0).contains(&self.grazing_deg) {
+            return Err(NearfieldError::invalid(
+                "reconstruct.grazing_deg",
+                format!("{} is outside [0, 45)", self.grazing_deg),
+            ));
+        }
         Ok(())
     }
 }
@@ -118,6 +136,9 @@ pub struct ReconstructReport {
     pub tests: u64,
     /// Bytes of the masks held.
     pub mask_bytes: usize,
+    /// Fraction of the lit pixels (sampled over up to 64 cameras) whose line of sight meets the
+    /// carved volume: how much of the light the proxy explains (1: all of it).
+    pub coverage: f64,
     /// Seconds reading images and building masks, carving, meshing.
     pub seconds: [f64; 3],
 }
@@ -131,6 +152,75 @@ pub struct Reconstruction {
     pub occupancy: Occupancy,
     /// What was done.
     pub report: ReconstructReport,
+}
+
+impl Reconstruction {
+    /// The mesh as a `.lvpack` stores a proxy: a surface (not a bound), its source saying how it
+    /// was made.
+    pub fn to_pack_proxy(&self) -> PackProxy {
+        let r = &self.report;
+        PackProxy {
+            triangles: self.mesh.soup(),
+            bound: false,
+            source: format!(
+                "reconstructed from the scan ({} of {} cameras carving, {:.2} mm cells, {} triangles)",
+                r.cameras_used,
+                r.cameras_read,
+                r.voxel_m * 1e3,
+                r.triangles
+            ),
+        }
+    }
+}
+
+/// Least [`ReconstructReport::coverage`] of a proxy [`scan_proxy`] keeps: a mesh that misses more
+/// of the light would hide it (a surface proxy shows light only where it is).
+pub const MIN_COVERAGE: f64 = 0.8;
+
+/// The proxy stored for a scan given without one (by `lumiview pack`, and by `render` and
+/// `lumi_luminaire_load` when they pack a manifest): [`reconstruct`] with the default options.
+/// `Ok(None)` with a warning naming `what` when nothing could be recovered (no camera saw light,
+/// or nothing survived carving): the scan then renders without a proxy, as before.
+///
+/// Errors: an image that cannot be read (as the scan's source reports it).
+pub fn scan_proxy(
+    scan: &Scan,
+    what: &str,
+    progress: Progress,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Reconstruction>> {
+    let rec = match reconstruct(
+        &scan.set,
+        &|i| scan.source.image(i),
+        &ReconstructOptions::default(),
+        progress,
+    ) {
+        Ok(rec) => rec,
+        Err(NearfieldError::InvalidArgument { name, message }) if name == "scan" => {
+            warnings.push(format!("{what}: no proxy reconstructed: {message}"));
+            return Ok(None);
+        }
+        Err(e) => return Err(e),
+    };
+    if rec.mesh.triangles.is_empty() || rec.report.coverage < MIN_COVERAGE {
+        if !rec.mesh.triangles.is_empty() {
+            warnings.push(format!(
+                "{what}: the reconstructed proxy was dropped: it explains {:.1} % of the lit pixels (below {:.0} %); \
+                 the scan renders without a proxy",
+                rec.report.coverage * 100.0,
+                MIN_COVERAGE * 100.0
+            ));
+            return Ok(None);
+        }
+        warnings.push(format!(
+            "{what}: no proxy reconstructed: no luminous surface survived carving ({} cameras, {:.2} mm cells); \
+             the scan renders without a proxy",
+            rec.report.cameras_used,
+            rec.report.voxel_m * 1e3
+        ));
+        return Ok(None);
+    }
+    Ok(Some(rec))
 }
 
 /// Progress of [`reconstruct`]: `(stage, done, total)`, stage `"masks"` or `"carving"`.
@@ -176,9 +266,12 @@ pub fn reconstruct(
     let mut content: f64 = 0.0;
     let mut footprint = f64::INFINITY;
     for (&i, m) in chosen.iter().zip(masks) {
-        let Some(m) = m else { continue };
+        let Some(mut m) = m else { continue };
         if m.max_cd_m2 < opts.camera_relative * brightest {
-            continue;
+            // Sees the back of the source or nothing: all dark (the one-sided test takes that as
+            // the back of an emitter, not as empty space).
+            let (w, h) = m.size();
+            m = LitMask::unlit(w, h);
         }
         let cam = &set.cameras[i];
         let k = *set.intrinsics_of(i);
@@ -198,6 +291,12 @@ pub fn reconstruct(
     }
     let content = (content * 1.02).min(set.sphere.radius_m * 0.999);
     let mask_bytes = views.iter().map(|v| v.mask.bytes()).sum();
+    // Every prefix spread over the sphere (the chosen cameras are in index order, often by ring).
+    let mut slots: Vec<Option<View>> = views.into_iter().map(Some).collect();
+    let views: Vec<View> = carve::spread_order(slots.len())
+        .into_iter()
+        .filter_map(|i| slots[i].take())
+        .collect();
     let t1 = Instant::now();
     // Finest cell: about one capture pixel's footprint at the centre, at most max_cells per axis.
     let max_levels = (opts.max_cells / carve::BASE_CELLS).max(1).ilog2();
@@ -206,11 +305,13 @@ pub fn reconstruct(
         .log2()
         .ceil() as u32;
     let levels = want.clamp(1, max_levels);
-    let occupancy = carve::carve(&views, centre, content, content, levels, &|d, t| {
+    let grazing = opts.grazing_deg.to_radians().sin();
+    let occupancy = carve::carve(&views, centre, content, content, levels, grazing, &|d, t| {
         progress("carving", d as usize, t as usize)
     });
     let t2 = Instant::now();
     let mesh = mesh::surface_nets(&occupancy);
+    let coverage = coverage(&views, &occupancy);
     let t3 = Instant::now();
     let report = ReconstructReport {
         cameras_read: chosen.len(),
@@ -222,6 +323,7 @@ pub fn reconstruct(
         triangles: mesh.triangles.len(),
         tests: occupancy.tests,
         mask_bytes,
+        coverage,
         seconds: [
             (t1 - t0).as_secs_f64(),
             (t2 - t1).as_secs_f64(),
@@ -233,6 +335,84 @@ pub fn reconstruct(
         occupancy,
         report,
     })
+}
+
+/// Fraction of the lit pixels of up to 64 views (the first in `views`' order; up to 2000 pixels
+/// each) whose line of sight passes through or beside (one cell) an occupied cell of `occ` (1 when
+/// no pixel is lit). Beside: a pixel is lit when any of its light is, so its centre may look just
+/// past a silhouette.
+pub fn coverage(views: &[View], occ: &Occupancy) -> f64 {
+    let occ = &dilated(occ);
+    let (hit, all) = views
+        .iter()
+        .filter(|v| v.mask.lit_pixels > 0)
+        .take(64)
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|v| {
+            let pts = v.mask.lit_centres(2000);
+            let hits = pts
+                .iter()
+                .filter(|&&(u, w)| {
+                    let dir = v.camera.to_world(v.intrinsics.ray_camera(u, w)).normalize_or_zero();
+                    meets(occ, v.camera.position_m, dir)
+                })
+                .count();
+            (hits, pts.len())
+        })
+        .reduce(|| (0, 0), |a, b| (a.0 + b.0, a.1 + b.1));
+    if all == 0 {
+        1.0
+    } else {
+        hit as f64 / all as f64
+    }
+}
+
+/// `occ` grown by one cell (26-neighbourhood): three separable passes.
+fn dilated(occ: &Occupancy) -> Occupancy {
+    let n = occ.n;
+    let mut cells = occ.cells.clone();
+    for stride in [1, n, n * n] {
+        let src = cells.clone();
+        for (i, c) in cells.iter_mut().enumerate() {
+            let k = (i / stride) % n;
+            *c = src[i] || (k > 0 && src[i - stride]) || (k + 1 < n && src[i + stride]);
+        }
+    }
+    Occupancy { cells, ..occ.clone() }
+}
+
+/// Whether the ray from `origin` along unit `dir` passes through an occupied cell (sampled every
+/// half cell inside the grid).
+fn meets(occ: &Occupancy, origin: DVec3, dir: DVec3) -> bool {
+    let lo = occ.origin;
+    let hi = occ.origin + DVec3::splat(occ.voxel_m * occ.n as f64);
+    // Slab test.
+    let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
+    for a in 0..3 {
+        if dir[a].abs() < 1e-15 {
+            if origin[a] < lo[a] || origin[a] > hi[a] {
+                return false;
+            }
+            continue;
+        }
+        let (ta, tb) = ((lo[a] - origin[a]) / dir[a], (hi[a] - origin[a]) / dir[a]);
+        t0 = t0.max(ta.min(tb));
+        t1 = t1.min(ta.max(tb));
+    }
+    if t0 > t1 {
+        return false;
+    }
+    let step = occ.voxel_m * 0.5;
+    let mut t = t0 + step * 0.5;
+    while t < t1 {
+        let p = (origin + dir * t - lo) / occ.voxel_m;
+        if occ.at(p.x.floor() as i64, p.y.floor() as i64, p.z.floor() as i64) {
+            return true;
+        }
+        t += step;
+    }
+    false
 }
 
 /// Up to `max` camera indices spread evenly over the directions of `set`'s cameras from the

@@ -49,6 +49,10 @@ pub struct EvalArgs {
     /// spot, 6 for a strip or a gap).
     #[arg(long)]
     pub feature_px: Option<f64>,
+    /// Also render continuous selection with the proxy reconstructed from the scan (docs/proxy.md),
+    /// as `continuous+rec-proxy`, beside the true proxy (continuous+proxy) and none (continuous).
+    #[arg(long)]
+    pub reconstructed_proxy: bool,
     /// Where synthetic scans are packed and cached (reused when the cameras match).
     #[arg(long, default_value = "target/eval")]
     pub work_dir: PathBuf,
@@ -104,6 +108,7 @@ pub fn eval(a: &EvalArgs) -> CliResult {
         ortho_px: a.ortho_px,
         capture_samples: a.capture_samples,
         feature_view_px: a.feature_px,
+        reconstructed_proxy: a.reconstructed_proxy,
         max_capture_px: a.max_capture_px.max(32),
         max_view_px: a.max_view_px.max(16),
         sweep_spacings: a.sweep_spacings,

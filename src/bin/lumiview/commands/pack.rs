@@ -52,8 +52,13 @@ pub struct PackArgs {
     pub radius: Option<f64>,
     /// A proxy mesh (glTF 2.0, luminaire frame) to store in the pack (version 2), used by `render`
     /// and `lumi_luminaire_load` unless they are given another; it replaces one the input has.
-    #[arg(long, value_name = "FILE.glb")]
+    /// Without it, a scan manifest's or --synth scan's proxy is reconstructed from its images
+    /// (docs/proxy.md; `lumiview proxy` writes it for inspection).
+    #[arg(long, value_name = "FILE.glb", conflicts_with = "no_proxy")]
     pub proxy: Option<PathBuf>,
+    /// Store no proxy: neither reconstruct one nor keep the input's.
+    #[arg(long)]
+    pub no_proxy: bool,
     /// The --proxy mesh encloses the light instead of being its surface (as `rays2scan` writes a
     /// ray file's `proxy.glb`): the renderer then samples the images plainly.
     #[arg(long, requires = "proxy")]
@@ -73,29 +78,43 @@ pub struct PackArgs {
 /// The scan the arguments describe, a description for the metadata, and the proxy to store.
 type Input = (Scan, String, Option<PackProxy>);
 
+/// Rays per pixel edge of the synthetic captures a --synth proxy is reconstructed from.
+const RECONSTRUCT_SUPERSAMPLE: u32 = 3;
+
+/// --synth's default camera layout.
+const DEFAULT_SYNTH_LAYOUT: &str = "rigo:28000";
+
+/// The synthetic scan --synth asks for (`None` without --synth).
+fn synth_options(args: &PackArgs) -> Result<Option<SynthOptions>, Box<dyn std::error::Error>> {
+    let Some(name) = &args.synth else { return Ok(None) };
+    let d = SynthOptions::default();
+    Ok(Some(SynthOptions {
+        luminaire: name.clone(),
+        layout: crate::commands::parse_layout(args.layout.as_deref().unwrap_or(DEFAULT_SYNTH_LAYOUT))?,
+        radius_m: args.radius.unwrap_or(d.radius_m),
+        size: args
+            .size
+            .as_deref()
+            .map(crate::commands::parse_size_px)
+            .transpose()?
+            .unwrap_or(d.size),
+        ..d
+    }))
+}
+
 /// The scan the arguments describe, with a description for the metadata and the proxy to store.
 fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
-    if let Some(name) = &args.synth {
+    if let Some(opts) = synth_options(args)? {
         if !args.input.is_empty() {
             return Err("give either input files or --synth, not both".into());
         }
-        let d = SynthOptions::default();
-        let layout_text = args.layout.as_deref().unwrap_or("rigo:28000");
-        let opts = SynthOptions {
-            luminaire: name.clone(),
-            layout: crate::commands::parse_layout(layout_text)?,
-            radius_m: args.radius.unwrap_or(d.radius_m),
-            size: args
-                .size
-                .as_deref()
-                .map(crate::commands::parse_size_px)
-                .transpose()?
-                .unwrap_or(d.size),
-            ..d
-        };
         let desc = format!(
-            "synthetic {} ({layout_text}, {}x{} px, r = {} m)",
-            opts.luminaire, opts.size.0, opts.size.1, opts.radius_m
+            "synthetic {} ({}, {}x{} px, r = {} m)",
+            opts.luminaire,
+            args.layout.as_deref().unwrap_or(DEFAULT_SYNTH_LAYOUT),
+            opts.size.0,
+            opts.size.1,
+            opts.radius_m
         );
         return Ok((synth_scan(&opts)?, desc, None));
     }
@@ -144,6 +163,56 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
     Ok(input)
 }
 
+/// Whether the input is one whose proxy is reconstructed when none is given: scan manifests and
+/// --synth (a ray file brings the hull of its origins, a pack its own proxy or none).
+fn reconstructs(args: &PackArgs) -> bool {
+    args.synth.is_some()
+        || args
+            .input
+            .first()
+            .is_some_and(|f| source::detect(f).is_ok_and(|k| k == SourceKind::Manifest))
+}
+
+/// The proxy reconstructed from `scan`'s images, with a progress bar and a line on stderr.
+fn reconstructed_proxy(scan: &Scan, what: &str, quiet: bool) -> Result<Option<PackProxy>, Box<dyn std::error::Error>> {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr())
+    };
+    if let Ok(style) = ProgressStyle::with_template("proxy: {msg:8} {bar:40} {pos}/{len} [{elapsed_precise}]") {
+        bar.set_style(style);
+    }
+    let mut warnings = Vec::new();
+    let rec = lumiview::nearfield::reconstruct::scan_proxy(
+        scan,
+        what,
+        &|stage, done, total| {
+            bar.set_message(stage.to_string());
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+        &mut warnings,
+    );
+    bar.finish_and_clear();
+    for w in &warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    let Some(rec) = rec? else { return Ok(None) };
+    if !quiet {
+        let r = &rec.report;
+        eprintln!(
+            "proxy: reconstructed from {} of {} cameras, {:.2} mm cells, {} triangles in {:.1} s (--no-proxy: none)",
+            r.cameras_used,
+            r.cameras_read,
+            r.voxel_m * 1e3,
+            r.triangles,
+            r.seconds.iter().sum::<f64>()
+        );
+    }
+    Ok(Some(rec.to_pack_proxy()))
+}
+
 fn stats_json(path: &Path, s: &PackStats, secs: f64) -> serde_json::Value {
     json!({
         "file": path.display().to_string(),
@@ -185,6 +254,21 @@ pub fn pack(args: &PackArgs) -> CliResult {
             bound: args.proxy_bound,
             source: format!("{}", path.display()),
         }),
+        None if args.no_proxy => None,
+        None if proxy.is_none() && reconstructs(args) => match synth_options(args)? {
+            // The synthetic goniophotometer samples pixel centres; a real camera integrates over its
+            // pixels and sees a surface edge-on. Reconstruct from captures that do (3 × 3 rays per
+            // pixel; only the ≤ 1024 cameras reconstruction reads are rendered so).
+            Some(opts) => reconstructed_proxy(
+                &synth_scan(&SynthOptions {
+                    supersample: RECONSTRUCT_SUPERSAMPLE,
+                    ..opts
+                })?,
+                &source,
+                args.quiet,
+            )?,
+            None => reconstructed_proxy(&scan, &source, args.quiet)?,
+        },
         None => proxy,
     };
     let opts = PackOptions {
