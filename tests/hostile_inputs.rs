@@ -130,6 +130,8 @@ fn f01_a_flipped_byte_in_any_section_fails_render_at_once_naming_it() {
         "400x400",
         "--page-mib",
         "16",
+        // The pack's sections as before (no reconstructed proxy; it has its own tests).
+        "--no-proxy",
         "--quiet",
         "-o",
         s(&good),
@@ -332,6 +334,8 @@ fn f05_concurrent_interrupted_and_killed_packs_leave_a_whole_file_and_no_tempora
             layout.into(),
             "--size".into(),
             "200x200".into(),
+            // What is timed is the writing (a reconstructed proxy would come first).
+            "--no-proxy".into(),
             "--quiet".into(),
             "-o".into(),
             s(&out).into(),

@@ -11,7 +11,7 @@ use lumiview::nearfield::layout::Layout;
 use lumiview::nearfield::manifest::write_scan;
 use lumiview::nearfield::pack::{write_pack, Pack, PackOptions};
 use lumiview::nearfield::proxy::triangles_of;
-use lumiview::nearfield::reconstruct::{chamfer, scan_proxy};
+use lumiview::nearfield::reconstruct::{chamfer, scan_proxy, PROXY_IS_BOUND};
 use lumiview::nearfield::scanfile::{scan_from_file_with_warnings, ScanFileKind};
 use lumiview::nearfield::synth::{self, synth_scan, SynthOptions};
 
@@ -69,7 +69,10 @@ fn reconstruction_is_near_the_true_proxy() {
         assert!(rec.report.coverage > 0.95, "{name}: coverage {}", rec.report.coverage);
         // Stored as a surface proxy that says where it came from.
         let p = rec.to_pack_proxy();
-        assert!(!p.bound && p.source.starts_with("reconstructed"), "{p:?}");
+        assert!(
+            p.bound == PROXY_IS_BOUND && p.source.starts_with("reconstructed"),
+            "{p:?}"
+        );
         assert_eq!(p.triangles.len(), 3 * rec.report.triangles);
     }
 }
@@ -102,7 +105,7 @@ fn a_manifest_gets_a_reconstructed_proxy_in_its_pack() {
     assert!(warnings.is_empty(), "{warnings:?}");
     let proxy = proxy.expect("a reconstructed proxy");
     assert!(
-        !proxy.bound && proxy.source.starts_with("reconstructed"),
+        proxy.bound == PROXY_IS_BOUND && proxy.source.starts_with("reconstructed"),
         "{}",
         proxy.source
     );

@@ -126,7 +126,7 @@ bool lv_scan_ensure(const char *repo_root, lv_scan_files *out) {
     if (need_pack) {
         snprintf(tmp, sizeof tmp, "%s.tmp%ld.lvpack", out->pack, (long)getpid());
         char *argv[] = {cli, "pack", "--synth", LV_SCAN_LUMINAIRE, "--layout", LV_SCAN_LAYOUT, "--size", LV_SCAN_SIZE,
-                        "--quiet", "-o", tmp, NULL};
+                        "--no-proxy", "--quiet", "-o", tmp, NULL};
         if (!generate(argv, tmp, out->pack)) return false;
     }
     if (need_proxy) {

@@ -32,7 +32,7 @@ typedef struct lv_scan_files {
 /* The bundled scan's files under `<repo_root>/target/nearfield-demo/` (named after the luminaire,
  * layout and size). A missing file is generated with the lumiview CLI — `$LUMIVIEW_CLI` if set, else
  * `<repo_root>/target/debug/lumiview` (`cargo build --bin lumiview`):
- *   lumiview pack --synth two-planes --layout rigo:1000 --size 256x256 --quiet -o PACK
+ *   lumiview pack --synth two-planes --layout rigo:1000 --size 256x256 --no-proxy --quiet -o PACK
  *   lumiview synth two-planes --proxy GLB
  * each written under a temporary name and renamed, so an interrupted run never leaves a partial
  * file. The CLI runs without this process's LD_PRELOAD (the sanitizer runtime). Prints what it

@@ -52,7 +52,11 @@ pub fn evaluate(
         let (tris, warnings) = reconstructed_proxy(&p, progress)?;
         notes.extend(warnings);
         let kept = tris.is_some();
-        let id = r.add_pack(p.pack.clone(), tris, &opts)?;
+        let rec_opts = NearfieldOptions {
+            proxy_is_bound: crate::nearfield::reconstruct::PROXY_IS_BOUND,
+            ..opts.clone()
+        };
+        let id = r.add_pack(p.pack.clone(), tris, &rec_opts)?;
         let inst = r.add_instance(id, Mat4::IDENTITY)?;
         let mut gpu = Rendering {
             r,
@@ -67,11 +71,10 @@ pub fn evaluate(
                 ..EvalMode::CONTINUOUS_PROXY
             }
         };
-        let result = evaluate_mode(&mut gpu, mode, &p, cfg, &refs, progress);
+        let result = evaluate_mode(&mut gpu, mode, RECONSTRUCTED_LABEL, &p, cfg, &refs, progress);
         drop(gpu);
         r.remove_luminaire(id)?;
-        let mut report = result?;
-        report.mode = RECONSTRUCTED_LABEL.into();
+        let report = result?;
         if !kept {
             notes.push(format!("{RECONSTRUCTED_LABEL}: no proxy kept, rendered without one"));
         }
@@ -119,7 +122,7 @@ fn evaluate_loaded(
     };
     let mut reports = Vec::new();
     for mode in &cfg.modes {
-        reports.push(evaluate_mode(&mut gpu, *mode, p, cfg, &refs, progress)?);
+        reports.push(evaluate_mode(&mut gpu, *mode, &mode.label(), p, cfg, &refs, progress)?);
     }
     Ok(Loaded {
         modes: reports,
@@ -155,13 +158,14 @@ impl Rendering<'_> {
 fn evaluate_mode(
     gpu: &mut Rendering,
     mode: EvalMode,
+    label: &str,
     p: &Prepared,
     cfg: &EvalConfig,
     refs: &References,
     progress: &dyn Fn(&str),
 ) -> Result<ModeReport, EvalError> {
     let lum = p.lum.as_ref();
-    progress(&format!("{}: rendering {}", lum.name(), mode.label()));
+    progress(&format!("{}: rendering {label}", lum.name()));
     gpu.r.set_nearfield_settings(gpu.inst, mode.settings())?;
     let m_out = measure(gpu, &refs.outside)?;
     let m_in = measure(gpu, &refs.inside)?;
@@ -174,11 +178,7 @@ fn evaluate_mode(
             ("inside", &refs.inside, worst_in),
         ] {
             if let Some(i) = which {
-                let f = dir.join(format!(
-                    "{}-{}-{tag}-worst.png",
-                    lum.name(),
-                    mode.label().replace('+', "-")
-                ));
+                let f = dir.join(format!("{}-{}-{tag}-worst.png", lum.name(), label.replace('+', "-")));
                 write_view(gpu, set, i, dir, &f)?;
             }
         }
@@ -187,7 +187,7 @@ fn evaluate_mode(
     let phi_hat = flux(gpu, &refs.ortho, refs.centre, p.rb, cfg.ortho_px)?;
     let sweep = sweep(gpu, &refs.sweep)?;
     Ok(ModeReport {
-        mode: mode.label(),
+        mode: label.to_string(),
         outside: aggregate(&m_out),
         inside: aggregate(&m_in),
         held_out: aggregate(&m_held),

@@ -161,7 +161,7 @@ impl Reconstruction {
         let r = &self.report;
         PackProxy {
             triangles: self.mesh.soup(),
-            bound: false,
+            bound: PROXY_IS_BOUND,
             source: format!(
                 "reconstructed from the scan ({} of {} cameras carving, {:.2} mm cells, {} triangles)",
                 r.cameras_used,
@@ -172,6 +172,10 @@ impl Reconstruction {
         }
     }
 }
+
+/// Whether a reconstructed proxy is stored as a bound (the renderer samples the images plainly and
+/// dark cameras vote) rather than a surface (only cameras that see light vote where any does).
+pub const PROXY_IS_BOUND: bool = false;
 
 /// Least [`ReconstructReport::coverage`] of a proxy [`scan_proxy`] keeps: a mesh that misses more
 /// of the light would hide it (a surface proxy shows light only where it is).
