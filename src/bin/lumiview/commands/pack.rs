@@ -175,23 +175,12 @@ fn reconstructs(args: &PackArgs) -> bool {
 
 /// The proxy reconstructed from `scan`'s images, with a progress bar and a line on stderr.
 fn reconstructed_proxy(scan: &Scan, what: &str, quiet: bool) -> Result<Option<PackProxy>, Box<dyn std::error::Error>> {
-    let bar = if quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr())
-    };
-    if let Ok(style) = ProgressStyle::with_template("proxy: {msg:8} {bar:40} {pos}/{len} [{elapsed_precise}]") {
-        bar.set_style(style);
-    }
+    let bar = super::proxy::bar(quiet, "proxy:");
     let mut warnings = Vec::new();
     let rec = lumiview::nearfield::reconstruct::scan_proxy(
         scan,
         what,
-        &|stage, done, total| {
-            bar.set_message(stage.to_string());
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        },
+        &|stage, done, total| super::proxy::show_stage(&bar, stage, done, total),
         &mut warnings,
     );
     bar.finish_and_clear();

@@ -87,7 +87,9 @@ pub fn proxy(args: &ProxyArgs) -> CliResult {
     }
 }
 
-fn bar(quiet: bool) -> ProgressBar {
+/// A progress bar for reconstruction's stages ("masks", "carving"), labelled `prefix`; hidden
+/// when `quiet`. [`show_stage`] moves it.
+pub(super) fn bar(quiet: bool, prefix: &str) -> ProgressBar {
     let bar = if quiet {
         ProgressBar::hidden()
     } else {
@@ -96,7 +98,15 @@ fn bar(quiet: bool) -> ProgressBar {
     if let Ok(style) = ProgressStyle::with_template("{prefix} {msg:8} {bar:40} {pos}/{len} [{elapsed_precise}]") {
         bar.set_style(style);
     }
+    bar.set_prefix(prefix.to_string());
     bar
+}
+
+/// Shows reconstruction's progress `(stage, done, total)` on `bar`.
+pub(super) fn show_stage(bar: &ProgressBar, stage: &str, done: usize, total: usize) {
+    bar.set_message(stage.to_string());
+    bar.set_length(total as u64);
+    bar.set_position(done as u64);
 }
 
 fn run(
@@ -105,9 +115,7 @@ fn run(
     bar: &ProgressBar,
 ) -> lumiview::nearfield::error::Result<Reconstruction> {
     reconstruct(&scan.set, &|i| scan.source.image(i), opts, &|stage, done, total| {
-        bar.set_message(stage.to_string());
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
+        show_stage(bar, stage, done, total)
     })
 }
 
@@ -209,8 +217,7 @@ fn from_file(args: &ProxyArgs) -> CliResult {
     if args.stored {
         return Err("--stored applies to a .lvpack".into());
     }
-    let bar = bar(args.quiet);
-    bar.set_prefix("proxy:");
+    let bar = bar(args.quiet, "proxy:");
     let rec = run(&scan, &args.options(), &bar);
     bar.finish_and_clear();
     let rec = rec?;
@@ -307,8 +314,7 @@ fn synth_table(args: &ProxyArgs, names: &str) -> CliResult {
         };
         let scan = synth_scan(&opts)?;
         let lum = synth::luminaire(name)?;
-        let bar = bar(args.quiet);
-        bar.set_prefix(format!("{name}:"));
+        let bar = bar(args.quiet, &format!("{name}:"));
         let rec = run(&scan, &args.options(), &bar);
         bar.finish_and_clear();
         let rec = rec?;

@@ -258,6 +258,23 @@ pub fn render(a: &RenderArgs) -> CliResult {
     let loaded = match photometry {
         None => {
             let mut warnings = Vec::new();
+            // A manifest or ray file is packed into the cache on its first use: say so, as it can
+            // take a minute (the proxy reconstructed, the light field estimated).
+            let first_use = match kind {
+                SourceKind::Manifest => Some("reconstructing its proxy from the images"),
+                SourceKind::RayFile => Some("estimating its light field from the rays"),
+                _ => None,
+            };
+            if let Some(what) = first_use {
+                let dir = lumiview::nearfield::scanfile::default_cache_dir();
+                if lumiview::nearfield::scanfile::cache_path(&a.file, &dir).is_ok_and(|p| !p.exists()) {
+                    eprintln!(
+                        "lumiview: {}: packing into the scan cache {} once ({what}) …",
+                        a.file.display(),
+                        dir.display()
+                    );
+                }
+            }
             let Source::Scan { pack, cached } = source::open(&a.file, kind, &SourceOptions::default(), &mut warnings)?
             else {
                 return Err(format!("{}: opened as photometry, not as a scan", a.file.display()).into());
