@@ -43,9 +43,9 @@ pub fn evaluate(
     let Loaded {
         mut modes,
         quadrature_flux_error: quad,
-        mut notes,
         refs,
     } = result?;
+    let mut notes = refs.notes.clone();
     if cfg.reconstructed_proxy {
         // The proxy a user gets without a mesh, rendered as the contract's mode renders the true one
         // (or, where none is kept, without a proxy: what the user then sees).
@@ -96,12 +96,11 @@ pub fn evaluate(
 /// The label of continuous selection with the proxy reconstructed from the scan.
 pub const RECONSTRUCTED_LABEL: &str = "continuous+rec-proxy";
 
-/// What [`evaluate_loaded`] measured: every mode's report, the reference flux's own error, notes,
-/// and the references (for a further mode).
+/// What [`evaluate_loaded`] measured: every mode's report, the reference flux's own error, and the
+/// references (their notes, and for a further mode).
 struct Loaded {
     modes: Vec<ModeReport>,
     quadrature_flux_error: f64,
-    notes: Vec<String>,
     refs: References,
 }
 
@@ -127,7 +126,6 @@ fn evaluate_loaded(
     Ok(Loaded {
         modes: reports,
         quadrature_flux_error: refs.ortho.quadrature_flux_error,
-        notes: refs.notes.clone(),
         refs,
     })
 }

@@ -141,7 +141,8 @@ pub(super) fn prepare(name: &str, cfg: &EvalConfig, progress: &dyn Fn(&str)) -> 
 }
 
 /// Side (px) of the captures a reconstructed proxy is made from: the scan's cameras rendered again at
-/// most this large, with 3 × 3 rays per pixel as a sensor integrates (docs/proxy.md).
+/// most this large, with [`crate::nearfield::reconstruct::CAPTURE_SUPERSAMPLE`]² rays per pixel as a
+/// sensor integrates (docs/proxy.md).
 const RECONSTRUCT_PX: f64 = 256.0;
 
 /// `k` scaled to at most [`RECONSTRUCT_PX`] on its longer side (the same field of view).
@@ -172,7 +173,11 @@ pub(super) fn reconstructed_proxy(p: &Prepared, progress: &dyn Fn(&str)) -> Resu
         p.lum.name(),
         set.cameras.len()
     ));
-    let source = SynthSource::new(p.lum.clone(), set.clone(), 3)?;
+    let source = SynthSource::new(
+        p.lum.clone(),
+        set.clone(),
+        crate::nearfield::reconstruct::CAPTURE_SUPERSAMPLE,
+    )?;
     let scan = Scan {
         set,
         source: Box::new(source),

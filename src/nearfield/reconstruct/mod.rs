@@ -173,6 +173,12 @@ impl Reconstruction {
     }
 }
 
+/// Rays per pixel edge of the synthetic captures a synthetic scan's proxy is reconstructed from
+/// (`pack --synth`, `proxy --synth`, `eval --reconstructed-proxy`): the synthetic goniophotometer
+/// otherwise samples pixel centres, and a camera that does misses surfaces seen edge-on that a real
+/// one, integrating over its pixel, sees.
+pub const CAPTURE_SUPERSAMPLE: u32 = 3;
+
 /// Whether a reconstructed proxy is stored as a bound (the renderer samples the images plainly and
 /// dark cameras vote) rather than a surface (only cameras that see light vote where any does).
 pub const PROXY_IS_BOUND: bool = false;

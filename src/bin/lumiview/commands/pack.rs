@@ -7,6 +7,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use lumiview::nearfield::manifest::{load_scan, ImportOptions};
 use lumiview::nearfield::pack::{write_pack, Pack, PackOptions, PackProxy, PackStats, Threshold, MAX_PAGE_BYTES};
+use lumiview::nearfield::reconstruct::CAPTURE_SUPERSAMPLE;
 use lumiview::nearfield::scanfile::{self, ScanFileKind};
 use lumiview::nearfield::synth::{synth_scan, SynthOptions};
 use lumiview::nearfield::{Hemisphere, Scan};
@@ -78,9 +79,6 @@ pub struct PackArgs {
 /// The scan the arguments describe, a description for the metadata, and the proxy to store.
 type Input = (Scan, String, Option<PackProxy>);
 
-/// Rays per pixel edge of the synthetic captures a --synth proxy is reconstructed from.
-const RECONSTRUCT_SUPERSAMPLE: u32 = 3;
-
 /// --synth's default camera layout.
 const DEFAULT_SYNTH_LAYOUT: &str = "rigo:28000";
 
@@ -102,8 +100,11 @@ fn synth_options(args: &PackArgs) -> Result<Option<SynthOptions>, Box<dyn std::e
     }))
 }
 
-/// The scan the arguments describe, with a description for the metadata and the proxy to store.
+/// The scan the arguments describe, with a description for the metadata and the proxy to store: a
+/// scan manifest's or --synth scan's reconstructed from its images unless --proxy or --no-proxy is
+/// given, a ray file's or pack's its own.
 fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
+    let reconstruct = args.proxy.is_none() && !args.no_proxy;
     if let Some(opts) = synth_options(args)? {
         if !args.input.is_empty() {
             return Err("give either input files or --synth, not both".into());
@@ -116,7 +117,19 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
             opts.size.1,
             opts.radius_m
         );
-        return Ok((synth_scan(&opts)?, desc, None));
+        // The synthetic goniophotometer samples pixel centres; a real camera integrates over its
+        // pixels and sees a surface edge-on. Reconstruct from captures that do (only the ≤ 1024
+        // cameras reconstruction reads are rendered so).
+        let proxy = if reconstruct {
+            let captures = synth_scan(&SynthOptions {
+                supersample: CAPTURE_SUPERSAMPLE,
+                ..opts.clone()
+            })?;
+            reconstructed_proxy(&captures, &desc, args.quiet)?
+        } else {
+            None
+        };
+        return Ok((synth_scan(&opts)?, desc, proxy));
     }
     let Some(file) = args.input.first() else {
         return Err("nothing to pack: give a scan manifest, a ray file, an .lvpack or --synth LUMINAIRE".into());
@@ -129,7 +142,13 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
         };
         let scan = load_scan(&args.input, &opts)?;
         let names: Vec<String> = args.input.iter().map(|p| p.display().to_string()).collect();
-        return Ok((scan, format!("scan manifest {}", names.join(" + ")), None));
+        let desc = format!("scan manifest {}", names.join(" + "));
+        let proxy = if reconstruct {
+            reconstructed_proxy(&scan, &desc, args.quiet)?
+        } else {
+            None
+        };
+        return Ok((scan, desc, proxy));
     }
     for (given, name) in [
         (args.layout.is_some(), "--layout"),
@@ -161,16 +180,6 @@ fn input_scan(args: &PackArgs) -> Result<Input, Box<dyn std::error::Error>> {
         eprintln!("lumiview: warning: {w}");
     }
     Ok(input)
-}
-
-/// Whether the input is one whose proxy is reconstructed when none is given: scan manifests and
-/// --synth (a ray file brings the hull of its origins, a pack its own proxy or none).
-fn reconstructs(args: &PackArgs) -> bool {
-    args.synth.is_some()
-        || args
-            .input
-            .first()
-            .is_some_and(|f| source::detect(f).is_ok_and(|k| k == SourceKind::Manifest))
 }
 
 /// The proxy reconstructed from `scan`'s images, with a progress bar and a line on stderr.
@@ -244,20 +253,6 @@ pub fn pack(args: &PackArgs) -> CliResult {
             source: format!("{}", path.display()),
         }),
         None if args.no_proxy => None,
-        None if proxy.is_none() && reconstructs(args) => match synth_options(args)? {
-            // The synthetic goniophotometer samples pixel centres; a real camera integrates over its
-            // pixels and sees a surface edge-on. Reconstruct from captures that do (3 × 3 rays per
-            // pixel; only the ≤ 1024 cameras reconstruction reads are rendered so).
-            Some(opts) => reconstructed_proxy(
-                &synth_scan(&SynthOptions {
-                    supersample: RECONSTRUCT_SUPERSAMPLE,
-                    ..opts
-                })?,
-                &source,
-                args.quiet,
-            )?,
-            None => reconstructed_proxy(&scan, &source, args.quiet)?,
-        },
         None => proxy,
     };
     let opts = PackOptions {

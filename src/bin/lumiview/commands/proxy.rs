@@ -9,7 +9,9 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use lumiview::nearfield::manifest::{load_scan, ImportOptions};
 use lumiview::nearfield::pack::Pack;
 use lumiview::nearfield::proxy::{mesh_of_triangles, triangles_of};
-use lumiview::nearfield::reconstruct::{chamfer, reconstruct, ReconstructOptions, Reconstruction, MIN_COVERAGE};
+use lumiview::nearfield::reconstruct::{
+    chamfer, reconstruct, ReconstructOptions, Reconstruction, CAPTURE_SUPERSAMPLE, MIN_COVERAGE,
+};
 use lumiview::nearfield::scanfile::{self, ScanFileKind};
 use lumiview::nearfield::synth::{self, synth_scan, SynthOptions};
 use lumiview::nearfield::Scan;
@@ -40,7 +42,7 @@ pub struct ProxyArgs {
     pub size: String,
     /// Rays per pixel edge of the --synth captures (a camera integrates over its pixel; 1 samples
     /// the pixel centre only and misses surfaces seen edge-on).
-    #[arg(long, default_value_t = 3, value_name = "N")]
+    #[arg(long, default_value_t = CAPTURE_SUPERSAMPLE, value_name = "N")]
     pub supersample: u32,
     /// A .lvpack: write the proxy it stores instead of reconstructing one.
     #[arg(long)]
