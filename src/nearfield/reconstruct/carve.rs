@@ -8,7 +8,7 @@
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::hemisphere::in_open_hemisphere;
+use super::hemisphere::{in_open_hemisphere, separable};
 use super::mask::LitMask;
 use crate::nearfield::rayset::{Camera, Intrinsics};
 
@@ -125,37 +125,73 @@ fn screen(views: &[View], c: DVec3, h: f64) -> (Option<bool>, u64) {
     }
 }
 
-/// A finest cube: kept when no camera sees it all dark, or when some camera sees it wholly lit and
-/// a plane through it has every camera that sees it wholly lit in front and every camera that
-/// sees it dark behind ([`in_open_hemisphere`]): it may hold a one-sided emitter whose back those
-/// dark cameras see. Dark cameras within `grazing` (sine of the angle) of the plane across the mean
-/// lit direction are not counted: a surface seen that obliquely covers less than a pixel, and a
-/// camera that samples points (not areas) can miss it.
+/// A finest cube: kept when no camera sees it all dark, or when the cameras that see it wholly lit
+/// (or, where none does, those that see light in part of it) and those that see it dark fit `rule`. [`Rule::OneSided`]: a plane through it has
+/// every camera that sees it wholly lit in front and every camera that sees it dark behind
+/// ([`in_open_hemisphere`]): it may hold a one-sided emitter whose back those dark cameras see.
+/// Dark cameras within `grazing` (sine of the angle) of the plane across the mean lit direction are
+/// not counted: a surface seen that obliquely covers less than a pixel, and a camera that samples
+/// points (not areas) can miss it.
 ///
 /// `views` should be ordered so that every prefix is spread over the sphere: the test stops at the
 /// first checkpoint (32, 64, 128, … views) where the evidence already rules the cube out.
-fn decide(views: &[View], c: DVec3, h: f64, grazing: f64) -> (Option<bool>, u64) {
+fn decide(views: &[View], c: DVec3, h: f64, rule: Rule) -> (Option<bool>, u64) {
     let mut lit: Vec<DVec3> = Vec::new();
+    let mut mixed: Vec<DVec3> = Vec::new();
     let mut dark: Vec<DVec3> = Vec::new();
     let mut checkpoint = 32usize;
+    // Where no camera sees the cube wholly lit (within a footprint of a silhouette: a rim), the
+    // cameras that see light in part of it stand in for the lit ones; without them a source's rim
+    // would be carved back by a footprint (the disc's by 1.3–2.7 mm), and a surface proxy shows
+    // light only where it is.
+    let fits = |lit: &[DVec3], mixed: &[DVec3], dark: &[DVec3]| {
+        dark.is_empty() || rule.fits(if lit.is_empty() { mixed } else { lit }, dark)
+    };
     for (k, v) in views.iter().enumerate() {
         let towards = (v.camera.position_m - c).normalize_or_zero();
         match v.judge(c, h) {
             Verdict::Dark => dark.push(towards),
             Verdict::Lit => lit.push(towards),
-            // A footprint only partly lit proves nothing: beside a silhouette, a grazing camera sees
+            // A footprint only partly lit proves little: beside a silhouette, a grazing camera sees
             // the light behind the cube along its whole line of sight.
-            Verdict::Mixed | Verdict::Unseen => {}
+            Verdict::Mixed => mixed.push(towards),
+            Verdict::Unseen => {}
         }
         if k + 1 == checkpoint && k + 1 < views.len() {
             checkpoint *= 2;
-            if !dark.is_empty() && !one_sided(&lit, &dark, grazing) {
+            if !fits(&lit, &mixed, &dark) {
                 return (Some(false), k as u64 + 1);
             }
         }
     }
-    let keep = dark.is_empty() || one_sided(&lit, &dark, grazing);
-    (Some(keep), views.len() as u64)
+    (Some(fits(&lit, &mixed, &dark)), views.len() as u64)
+}
+
+/// Which mix of cameras that see a finest cube lit and dark still lets it hold an emitter.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rule {
+    /// An emitter facing a half-space (the lit and the reversed dark directions
+    /// [`in_open_hemisphere`]): the dark cameras see its back. Dark cameras within `grazing` (sine
+    /// of the angle) of its plane are not counted.
+    OneSided {
+        /// Sine of the grazing tolerance.
+        grazing: f64,
+    },
+    /// A directional emitter: the lit cameras lie in a cap (a cone of any width) that holds no
+    /// dark one ([`separable`]). It also keeps the space in front of and behind a flat source,
+    /// symmetrically (a cell there sees the source over a cap of directions), which
+    /// [`super::mesh::collapse_thin`] then collapses onto the source: the fallback for beams and
+    /// small features that the one-sided rule carves away.
+    Directional,
+}
+
+impl Rule {
+    fn fits(self, lit: &[DVec3], dark: &[DVec3]) -> bool {
+        match self {
+            Rule::OneSided { grazing } => one_sided(lit, dark, grazing),
+            Rule::Directional => !lit.is_empty() && separable(lit, dark),
+        }
+    }
 }
 
 /// Whether the cameras that see a cube lit (`lit`, directions towards them) and those that see it
@@ -204,7 +240,7 @@ pub fn carve(
     half_m: f64,
     content_m: f64,
     levels: u32,
-    grazing: f64,
+    rule: Rule,
     progress: &(dyn Fn(u32, u32) + Sync),
 ) -> Occupancy {
     let n = BASE_CELLS << levels;
@@ -232,7 +268,7 @@ pub fn carve(
                     return ([x, y, z], Some(false), 0);
                 }
                 let (verdict, k) = if finest {
-                    decide(views, c, h, grazing)
+                    decide(views, c, h, rule)
                 } else {
                     screen(views, c, h)
                 };

@@ -10,6 +10,33 @@ use glam::DVec3;
 /// Whether some unit `n` has `n·v > 0` for every `v` in `vs` (true for an empty set).
 pub fn in_open_hemisphere(vs: &[DVec3]) -> bool {
     let Some(&first) = vs.first() else { return true };
+    origin_outside_hull(first, &|x| lowest(vs, x))
+}
+
+/// Whether some plane (not necessarily through the origin) has every point of `a` strictly on one
+/// side and every point of `b` strictly on the other: their convex hulls do not meet, i.e. the
+/// origin lies outside the hull of the Minkowski difference `a − b` (true when either is empty).
+/// For directions towards cameras: `a` fits in a cap (a cone of any width) that holds no point of
+/// `b`, the test for a directional emitter.
+pub fn separable(a: &[DVec3], b: &[DVec3]) -> bool {
+    let (Some(&a0), Some(&b0)) = (a.first(), b.first()) else {
+        return true;
+    };
+    origin_outside_hull(a0 - b0, &|x| lowest(a, x) - lowest(b, -x))
+}
+
+/// The point of `vs` with the least dot product with `x`.
+fn lowest(vs: &[DVec3], x: DVec3) -> DVec3 {
+    vs.iter()
+        .copied()
+        .min_by(|p, q| p.dot(x).total_cmp(&q.dot(x)))
+        .unwrap_or(DVec3::ZERO)
+}
+
+/// GJK: whether the origin lies strictly outside the convex hull of a point set given by its
+/// support (`support(x)`: the point of the set with the least dot product with `x`), starting from
+/// one of its points.
+fn origin_outside_hull(first: DVec3, support: &dyn Fn(DVec3) -> DVec3) -> bool {
     let mut simplex: Vec<DVec3> = vec![first];
     let mut x = first;
     for _ in 0..64 {
@@ -18,11 +45,7 @@ pub fn in_open_hemisphere(vs: &[DVec3]) -> bool {
             return false;
         }
         // Support point of the hull in direction −x.
-        let w = vs
-            .iter()
-            .copied()
-            .min_by(|a, b| a.dot(x).total_cmp(&b.dot(x)))
-            .unwrap_or(first);
+        let w = support(x);
         if w.dot(x) > 0.0 {
             // Every point is strictly on x's side: x separates.
             return true;
@@ -155,5 +178,38 @@ mod tests {
         ]));
         // A tiny margin still separates.
         assert!(in_open_hemisphere(&[dir(89.9, 0.0), dir(89.9, 180.0), dir(0.0, 0.0)]));
+    }
+
+    #[test]
+    fn a_narrow_cap_is_separable_from_the_dark_around_it_and_a_ring_between_dark_is_not() {
+        // A beam: lit within 20° of the nadir, dark from 30° to 90° (and the back): one cap.
+        let cap: Vec<DVec3> = (0..=20)
+            .step_by(5)
+            .flat_map(|t| (0..360).step_by(30).map(move |p| dir(f64::from(t), f64::from(p))))
+            .collect();
+        let rest: Vec<DVec3> = (30..=180)
+            .step_by(10)
+            .flat_map(|t| (0..360).step_by(30).map(move |p| dir(f64::from(t), f64::from(p))))
+            .collect();
+        assert!(separable(&cap, &rest));
+        assert!(separable(&rest, &cap));
+        // Not a hemisphere test: the lit and the negated dark do not lie in one open hemisphere.
+        let mixed: Vec<DVec3> = cap.iter().copied().chain(rest.iter().map(|d| -*d)).collect();
+        assert!(!in_open_hemisphere(&mixed));
+        // Dark at the cap's centre as well as around it: the lit ring lies between dark
+        // directions, and no plane separates.
+        let ring: Vec<DVec3> = cap
+            .iter()
+            .copied()
+            .filter(|d| d.z > -(4f64.to_radians().cos()))
+            .collect();
+        let mut dark = rest.clone();
+        dark.push(dir(0.0, 0.0));
+        assert!(!separable(&ring, &dark));
+        // Lit towards both poles, dark around the equator: no plane either.
+        let two: Vec<DVec3> = cap.iter().copied().chain(cap.iter().map(|d| -*d)).collect();
+        let equator: Vec<DVec3> = (0..360).step_by(30).map(|p| dir(90.0, f64::from(p))).collect();
+        assert!(!separable(&two, &equator));
+        assert!(separable(&[], &rest) && separable(&cap, &[]));
     }
 }

@@ -150,25 +150,21 @@ impl LitMask {
         self.row_start.len() * 4 + self.runs.len() * 4 + self.dist.len()
     }
 
-    /// Whether every pixel whose centre lies in the square of half-size `r` (px) about (u, v) (pixel
-    /// coordinates, top-left corner 0) is dark. `None` when the square is not wholly inside the
-    /// image (the camera does not see all of it, so it says nothing).
+    /// Whether every pixel that the square of half-size `r` (px) about (u, v) (pixel coordinates,
+    /// top-left corner 0) overlaps is dark. A camera integrates over its pixels: light in the part of
+    /// a pixel that the square covers makes that pixel lit, however far its centre lies outside the
+    /// square, so a square is known dark only when every pixel it touches is (judged by centres, a
+    /// rim cell was called dark through the dark centre of a pixel whose other half held the rim:
+    /// the disc lost 1.3–2.7 mm of radius). `None` when the square is not wholly inside the image
+    /// (the camera does not see all of it, so it says nothing).
     pub fn dark(&self, u: f64, v: f64, r: f64) -> Option<bool> {
         let (x0, x1, y0, y1) = (u - r, u + r, v - r, v + r);
         if !(x0 >= 0.0 && y0 >= 0.0 && x1 <= f64::from(self.width) && y1 <= f64::from(self.height)) {
             return None;
         }
-        // Pixels whose centres (c + 0.5) fall in [x0, x1].
-        let (mut c0, mut c1) = ((x0 - 0.5).ceil() as i64, (x1 - 0.5).floor() as i64);
-        let (mut r0, mut r1) = ((y0 - 0.5).ceil() as i64, (y1 - 0.5).floor() as i64);
-        if c1 < c0 || r1 < r0 {
-            // Smaller than a pixel and between centres: the pixels it overlaps decide (a square
-            // between samples is not known to be dark).
-            (c0, c1) = (x0.floor() as i64, (x1.ceil() as i64 - 1).max(x0.floor() as i64));
-            (r0, r1) = (y0.floor() as i64, (y1.ceil() as i64 - 1).max(y0.floor() as i64));
-            c1 = c1.min(i64::from(self.width) - 1);
-            r1 = r1.min(i64::from(self.height) - 1);
-        }
+        let last = |hi: f64, lo: f64, n: u32| ((hi.ceil() as i64 - 1).max(lo.floor() as i64)).min(i64::from(n) - 1);
+        let (c0, c1) = (x0.floor() as i64, last(x1, x0, self.width));
+        let (r0, r1) = (y0.floor() as i64, last(y1, y0, self.height));
         if r1 - r0 < EXACT_ROWS {
             return Some(self.rows_dark(c0, c1, r0, r1));
         }
@@ -277,7 +273,7 @@ mod tests {
     }
 
     #[test]
-    fn dark_squares_are_exactly_those_without_a_lit_pixel_centre() {
+    fn dark_squares_are_exactly_those_overlapping_no_lit_pixel() {
         let img = image_with(200, 150, &[(50, 40), (51, 40), (120, 100)]);
         let m = LitMask::of(&img, 1e-3).unwrap();
         assert_eq!(m.lit_pixels, 3);
@@ -299,8 +295,8 @@ mod tests {
         .enumerate()
         {
             let truth = ![(50u32, 40u32), (51, 40), (120, 100)].iter().any(|&(c, rr)| {
-                let (x, y) = (f64::from(c) + 0.5, f64::from(rr) + 0.5);
-                (x - u).abs() <= r && (y - v).abs() <= r
+                let (x, y) = (f64::from(c), f64::from(rr));
+                x < u + r && x + 1.0 > u - r && y < v + r && y + 1.0 > v - r
             });
             let got = m.dark(u, v, r).unwrap();
             assert!(!got || truth, "square {i} called dark but holds a lit pixel");

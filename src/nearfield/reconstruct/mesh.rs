@@ -35,19 +35,15 @@ impl Mesh {
 
     /// As a [`ProxyMesh`] (one surface, area-weighted vertex normals) for glTF export.
     pub fn to_proxy_mesh(&self, name: &str, surface: &str) -> ProxyMesh {
-        let mut normals = vec![DVec3::ZERO; self.vertices.len()];
-        for t in &self.triangles {
-            let [a, b, c] = self.corners(t);
-            let n = (b - a).cross(c - a);
-            for &i in t {
-                normals[i as usize] += n;
-            }
-        }
+        let normals = vertex_normals(self);
         let mut m = ProxyMesh::new(name);
         m.surfaces.push(ProxySurface {
             name: surface.to_string(),
             positions: self.vertices.clone(),
-            normals: normals.into_iter().map(|n| n.normalize_or(DVec3::Z)).collect(),
+            normals: normals
+                .into_iter()
+                .map(|n| if n == DVec3::ZERO { DVec3::Z } else { n })
+                .collect(),
             indices: self.triangles.iter().flat_map(|t| t.iter().copied()).collect(),
         });
         m
@@ -145,16 +141,7 @@ pub fn surface_nets(occ: &Occupancy) -> Mesh {
 
 /// Taubin smoothing (λ = 0.5, μ = −0.53), each vertex clamped to its dual cube.
 fn smooth(mesh: &mut Mesh, cube_of: &[[i64; 3]], occ: &Occupancy) {
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
-    for t in &mesh.triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            if !neighbours[a as usize].contains(&b) {
-                neighbours[a as usize].push(b);
-                neighbours[b as usize].push(a);
-            }
-        }
-    }
+    let neighbours = neighbours(mesh);
     let bounds: Vec<(DVec3, DVec3)> = cube_of
         .iter()
         .map(|&[x, y, z]| {
@@ -382,6 +369,126 @@ pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
     (p - (a + ab * v + ac * w)).length()
 }
 
+/// Collapses the thin parts of a carved surface onto their middle. Carving leaves a flat emitter as
+/// a lens: only cameras that graze its plane can carve just in front of and behind it, so its top
+/// and bottom lie a few cells off the true surface, on either side. For each vertex, the line
+/// inward along its normal is followed through `occ` until it leaves the volume; where it does so
+/// within `max_thickness_m`, the vertex moves to the middle of that chord (the lens's two faces
+/// meet on its mid-surface). Vertices whose chord is longer (a thick body, or the rim of a lens,
+/// whose inward line runs along it) stay. Then the moves are smoothed over neighbours (two passes
+/// of averaging the displacement) so that the collapsed sheet keeps no stair steps.
+///
+/// Returns the number of vertices moved.
+pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> usize {
+    use rayon::prelude::*;
+    let normals = vertex_normals(mesh);
+    let step = occ.voxel_m * 0.25;
+    let cell = |p: DVec3| {
+        let q = (p - occ.origin) / occ.voxel_m;
+        occ.at(q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64)
+    };
+    let moves: Vec<Option<DVec3>> = mesh
+        .vertices
+        .par_iter()
+        .zip(&normals)
+        .map(|(&v, &n)| {
+            if n == DVec3::ZERO {
+                return None;
+            }
+            let mut inside = false;
+            let mut s = step;
+            while s <= max_thickness_m + step {
+                let here = cell(v - n * s);
+                if here {
+                    inside = true;
+                } else if inside {
+                    // Left the volume: the far face lies between the last two samples.
+                    let t = s - 0.5 * step;
+                    return (t <= max_thickness_m).then_some(-n * (0.5 * t));
+                } else if s > 1.5 * occ.voxel_m {
+                    return None;
+                }
+                s += step;
+            }
+            None
+        })
+        .collect();
+    let moved = moves.iter().filter(|m| m.is_some()).count();
+    let mut disp: Vec<DVec3> = moves.iter().map(|m| m.unwrap_or(DVec3::ZERO)).collect();
+    let neighbours = neighbours(mesh);
+    for _ in 0..2 {
+        let old = disp.clone();
+        for (i, nb) in neighbours.iter().enumerate() {
+            if moves[i].is_none() || nb.is_empty() {
+                continue;
+            }
+            let (sum, k) = nb
+                .iter()
+                .filter(|&&j| moves[j as usize].is_some())
+                .fold((old[i], 1.0), |(s, k), &j| (s + old[j as usize], k + 1.0));
+            disp[i] = sum / k;
+        }
+    }
+    for (v, d) in mesh.vertices.iter_mut().zip(disp) {
+        *v += d;
+    }
+    moved
+}
+
+/// Area-weighted vertex normals (unit, outward for a mesh wound outwards; zero where undefined).
+fn vertex_normals(mesh: &Mesh) -> Vec<DVec3> {
+    let mut normals = vec![DVec3::ZERO; mesh.vertices.len()];
+    for t in &mesh.triangles {
+        let [a, b, c] = mesh.corners(t);
+        let n = (b - a).cross(c - a);
+        for &i in t {
+            normals[i as usize] += n;
+        }
+    }
+    normals.into_iter().map(|n| n.normalize_or_zero()).collect()
+}
+
+/// Each vertex's neighbours along the triangles' edges.
+fn neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); mesh.vertices.len()];
+    for t in &mesh.triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if !neighbours[a as usize].contains(&b) {
+                neighbours[a as usize].push(b);
+                neighbours[b as usize].push(a);
+            }
+        }
+    }
+    neighbours
+}
+
+/// The cells of `occ`'s grid that `mesh` passes through (each triangle sampled every quarter cell),
+/// as an occupancy: to measure how much light a mesh that no longer bounds a volume explains.
+pub fn cells_of(mesh: &Mesh, occ: &Occupancy) -> Occupancy {
+    let n = occ.n as i64;
+    let mut cells = vec![false; occ.cells.len()];
+    let mut mark = |p: DVec3| {
+        let q = ((p - occ.origin) / occ.voxel_m).floor();
+        let (x, y, z) = (q.x as i64, q.y as i64, q.z as i64);
+        if (0..n).contains(&x) && (0..n).contains(&y) && (0..n).contains(&z) {
+            cells[((z * n + y) * n + x) as usize] = true;
+        }
+    };
+    for t in &mesh.triangles {
+        let [a, b, c] = mesh.corners(t);
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        let k = ((longest / (0.25 * occ.voxel_m)).ceil() as usize).clamp(1, 64);
+        for i in 0..=k {
+            for j in 0..=(k - i) {
+                let (u, v) = (i as f64 / k as f64, j as f64 / k as f64);
+                mark(a + (b - a) * u + (c - a) * v);
+            }
+        }
+    }
+    Occupancy { cells, ..occ.clone() }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -403,6 +510,66 @@ mod tests {
             n,
             cells,
             tests: 0,
+        }
+    }
+
+    /// A lens-like slab: a disc of radius `r_cells`, `thick` cells thick about z = n/2.
+    fn slab(n: usize, r_cells: f64, thick: usize) -> Occupancy {
+        let mut occ = ball(n, 0.0);
+        let c = n as f64 / 2.0;
+        for z in (n - thick) / 2..(n + thick) / 2 {
+            for y in 0..n {
+                for x in 0..n {
+                    let (dx, dy) = (x as f64 + 0.5 - c, y as f64 + 0.5 - c);
+                    occ.cells[(z * n + y) * n + x] = dx.hypot(dy) <= r_cells;
+                }
+            }
+        }
+        occ
+    }
+
+    #[test]
+    fn a_thin_slab_collapses_onto_its_middle_and_a_ball_does_not() {
+        let n = 48;
+        let cell = 1.0 / n as f64;
+        let occ = slab(n, 18.0, 6);
+        let mut m = surface_nets(&occ);
+        let moved = collapse_thin(&mut m, &occ, 10.0 * cell);
+        assert!(moved > m.vertices.len() / 2, "{moved} of {}", m.vertices.len());
+        // The faces' vertices (away from the rim) sit on the mid-plane z = 0.5 within a quarter cell.
+        let mut faces = 0;
+        for v in &m.vertices {
+            let r = (v.x - 0.5).hypot(v.y - 0.5);
+            if r < 14.0 * cell {
+                faces += 1;
+                assert!(
+                    (v.z - 0.5).abs() < 0.25 * cell,
+                    "{v} off the mid-plane by {} cells",
+                    (v.z - 0.5) / cell
+                );
+            }
+        }
+        assert!(faces > 100);
+        // A body thicker than the limit keeps its surface.
+        let occ = ball(32, 10.0);
+        let mut m = surface_nets(&occ);
+        let before = m.vertices.clone();
+        assert_eq!(collapse_thin(&mut m, &occ, 8.0 / 32.0), 0);
+        assert_eq!(m.vertices, before);
+        // The collapsed slab still passes through the cells the carved one lit up: its cells lie in
+        // the slab's middle layers.
+        let occ = slab(n, 18.0, 6);
+        let mut m = surface_nets(&occ);
+        collapse_thin(&mut m, &occ, 10.0 * cell);
+        let cells = cells_of(&m, &occ);
+        assert!(cells.count() > 0);
+        for (i, &c) in cells.cells.iter().enumerate() {
+            let z = i / (n * n);
+            if c {
+                let (x, y) = (i % n, (i / n) % n);
+                let r = (x as f64 + 0.5 - 24.0).hypot(y as f64 + 0.5 - 24.0);
+                assert!(r > 14.0 || (z == 23 || z == 24), "cell {x},{y},{z}");
+            }
         }
     }
 

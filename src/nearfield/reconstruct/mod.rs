@@ -66,8 +66,17 @@ pub struct ReconstructOptions {
     /// default 1e-6.
     pub camera_relative: f32,
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it (a camera that
-    /// samples points can miss a surface seen that obliquely); default 3.
+    /// samples points can miss a surface seen that obliquely); default 1.
     pub grazing_deg: f64,
+    /// Thin parts of the carved volume (a flat emitter's lens) are collapsed onto their middle when
+    /// thinner than this fraction of the content's diameter ([`mesh::collapse_thin`]); 0 keeps the
+    /// carved surface. Default 0.05.
+    pub thin_fraction: f64,
+    /// When the one-sided rule leaves a mesh that explains less than [`MIN_COVERAGE`] of the light
+    /// (beams, small features), carve again with [`carve::Rule::Directional`] and keep whichever
+    /// explains more. Default false: experimental (docs/proxy.md: it keeps most of the content
+    /// ball, takes minutes and gives meshes of up to a million triangles).
+    pub directional_fallback: bool,
 }
 
 impl Default for ReconstructOptions {
@@ -78,6 +87,8 @@ impl Default for ReconstructOptions {
             lit_relative: 1e-4,
             camera_relative: 1e-6,
             grazing_deg: 1.0,
+            thin_fraction: 0.05,
+            directional_fallback: false,
         }
     }
 }
@@ -111,6 +122,12 @@ impl ReconstructOptions {
                 format!("{} is outside [0, 45)", self.grazing_deg),
             ));
         }
+        if !(0.0..=0.5).contains(&self.thin_fraction) {
+            return Err(NearfieldError::invalid(
+                "reconstruct.thin_fraction",
+                format!("{} is outside [0, 0.5]", self.thin_fraction),
+            ));
+        }
         Ok(())
     }
 }
@@ -139,6 +156,14 @@ pub struct ReconstructReport {
     /// Fraction of the lit pixels (sampled over up to 64 cameras) whose line of sight meets the
     /// carved volume: how much of the light the proxy explains (1: all of it).
     pub coverage: f64,
+    /// Mesh vertices moved onto the middle of a thin part ([`mesh::collapse_thin`]); 0 when
+    /// nothing was thin or the collapse was undone because it explained less of the light.
+    pub collapsed_vertices: usize,
+    /// [`Self::coverage`] of the collapsed mesh itself (cells it passes through, grown by one), or
+    /// of the carved volume when nothing was collapsed.
+    pub collapsed_coverage: f64,
+    /// Whether the directional rule's carving was kept (the one-sided rule's explained too little).
+    pub directional: bool,
     /// Seconds reading images and building masks, carving, meshing.
     pub seconds: [f64; 3],
 }
@@ -182,6 +207,14 @@ pub const CAPTURE_SUPERSAMPLE: u32 = 3;
 /// Whether a reconstructed proxy is stored as a bound (the renderer samples the images plainly and
 /// dark cameras vote) rather than a surface (only cameras that see light vote where any does).
 pub const PROXY_IS_BOUND: bool = false;
+
+/// Largest thickness, as a fraction of the content's diameter, collapsed after directional carving
+/// (which keeps the space in front of and behind a flat source: the whole content ball across).
+pub const DIRECTIONAL_THIN_FRACTION: f64 = 1.0;
+
+/// Most coverage (fraction of the lit pixels) the thin-part collapse may lose against the carved
+/// volume's before it is undone.
+pub const COLLAPSE_COVERAGE_LOSS: f64 = 0.02;
 
 /// Least [`ReconstructReport::coverage`] of a proxy [`scan_proxy`] keeps: a mesh that misses more
 /// of the light would hide it (a surface proxy shows light only where it is).
@@ -316,13 +349,43 @@ pub fn reconstruct(
         .ceil() as u32;
     let levels = want.clamp(1, max_levels);
     let grazing = opts.grazing_deg.to_radians().sin();
-    let occupancy = carve::carve(&views, centre, content, content, levels, grazing, &|d, t| {
-        progress("carving", d as usize, t as usize)
-    });
-    let t2 = Instant::now();
-    let mesh = mesh::surface_nets(&occupancy);
-    let coverage = coverage(&views, &occupancy);
-    let t3 = Instant::now();
+    let rules = [
+        (carve::Rule::OneSided { grazing }, opts.thin_fraction),
+        (carve::Rule::Directional, DIRECTIONAL_THIN_FRACTION),
+    ];
+    let mut best: Option<Attempt> = None;
+    let (mut carve_s, mut mesh_s) = (0.0, 0.0);
+    for (k, &(rule, thin_fraction)) in rules.iter().enumerate() {
+        if k > 0 && (!opts.directional_fallback || best.as_ref().is_some_and(|b| b.coverage >= MIN_COVERAGE)) {
+            break;
+        }
+        let t = Instant::now();
+        let occupancy = carve::carve(&views, centre, content, content, levels, rule, &|d, t| {
+            progress(
+                if k == 0 { "carving" } else { "carving (directional)" },
+                d as usize,
+                t as usize,
+            )
+        });
+        carve_s += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let attempt = Attempt::mesh(&views, occupancy, rule, thin_fraction * 2.0 * content);
+        mesh_s += t.elapsed().as_secs_f64();
+        if best.as_ref().is_none_or(|b| attempt.coverage > b.coverage) {
+            best = Some(attempt);
+        }
+    }
+    let Some(Attempt {
+        occupancy,
+        mesh,
+        rule,
+        coverage,
+        collapsed_vertices,
+        collapsed_coverage,
+    }) = best
+    else {
+        unreachable!("the first rule always runs")
+    };
     let report = ReconstructReport {
         cameras_read: chosen.len(),
         cameras_used: views.len(),
@@ -334,17 +397,58 @@ pub fn reconstruct(
         tests: occupancy.tests,
         mask_bytes,
         coverage,
-        seconds: [
-            (t1 - t0).as_secs_f64(),
-            (t2 - t1).as_secs_f64(),
-            (t3 - t2).as_secs_f64(),
-        ],
+        collapsed_vertices,
+        collapsed_coverage,
+        directional: rule == carve::Rule::Directional,
+        seconds: [(t1 - t0).as_secs_f64(), carve_s, mesh_s],
     };
     Ok(Reconstruction {
         mesh,
         occupancy,
         report,
     })
+}
+
+/// One carving rule's result, meshed and checked.
+struct Attempt {
+    occupancy: Occupancy,
+    mesh: Mesh,
+    rule: carve::Rule,
+    coverage: f64,
+    collapsed_vertices: usize,
+    collapsed_coverage: f64,
+}
+
+impl Attempt {
+    /// Meshes `occupancy`, collapses its parts thinner than `max_thin_m` unless that hides light,
+    /// and measures the coverage.
+    fn mesh(views: &[View], occupancy: Occupancy, rule: carve::Rule, max_thin_m: f64) -> Self {
+        let mut mesh = mesh::surface_nets(&occupancy);
+        let carved = coverage(views, &occupancy);
+        let (mut collapsed_vertices, mut collapsed_coverage) = (0, carved);
+        if max_thin_m > 0.0 && !mesh.triangles.is_empty() {
+            let mut thin = mesh.clone();
+            let moved = mesh::collapse_thin(&mut thin, &occupancy, max_thin_m);
+            if moved > 0 {
+                let c = coverage(views, &mesh::cells_of(&thin, &occupancy));
+                // The collapse must not hide light the carved volume explained (a thin tube
+                // collapsed to a line would).
+                if c >= carved - COLLAPSE_COVERAGE_LOSS {
+                    mesh = thin;
+                    collapsed_vertices = moved;
+                    collapsed_coverage = c;
+                }
+            }
+        }
+        Self {
+            occupancy,
+            coverage: if mesh.triangles.is_empty() { 0.0 } else { carved },
+            mesh,
+            rule,
+            collapsed_vertices,
+            collapsed_coverage,
+        }
+    }
 }
 
 /// Fraction of the lit pixels of up to 64 views (the first in `views`' order; up to 2000 pixels

@@ -56,6 +56,14 @@ pub struct ProxyArgs {
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it.
     #[arg(long, default_value_t = ReconstructOptions::default().grazing_deg, value_name = "DEG")]
     pub grazing_deg: f64,
+    /// Parts of the carved volume thinner than this fraction of its diameter (a flat emitter's
+    /// lens) are collapsed onto their middle; 0 keeps the carved surface.
+    #[arg(long, default_value_t = ReconstructOptions::default().thin_fraction, value_name = "F")]
+    pub thin_fraction: f64,
+    /// Experimental: carve again with the directional rule when the one-sided rule's mesh explains
+    /// too little of the light (beams, small features; slow, large meshes: docs/proxy.md).
+    #[arg(long)]
+    pub directional: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -70,6 +78,8 @@ impl ProxyArgs {
             max_cameras: self.max_cameras,
             max_cells: self.max_cells,
             grazing_deg: self.grazing_deg,
+            thin_fraction: self.thin_fraction,
+            directional_fallback: self.directional,
             ..ReconstructOptions::default()
         }
     }
@@ -134,6 +144,9 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "tests": r.tests,
         "mask_bytes": r.mask_bytes,
         "coverage": r.coverage,
+        "collapsed_vertices": r.collapsed_vertices,
+        "collapsed_coverage": r.collapsed_coverage,
+        "directional": r.directional,
         "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2]},
     })
 }
@@ -405,19 +418,30 @@ fn synth_table(args: &ProxyArgs, names: &str) -> CliResult {
     print_report(&out)
 }
 
+/// The carving rule the kept mesh came from.
+fn rule_name(r: &lumiview::nearfield::reconstruct::ReconstructReport) -> &'static str {
+    if r.directional {
+        "dir"
+    } else {
+        "1-sided"
+    }
+}
+
 fn finite(v: f64) -> Option<f64> {
     v.is_finite().then_some(v)
 }
 
 fn header_text() -> String {
     format!(
-        "{:<11} {:>8} {:>6} {:>7} {:>9} {:>7} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7} {:>5} {:>7}",
+        "{:<11} {:>8} {:>6} {:>7} {:>9} {:>7} {:>7} {:>9} {:>8} {:>8} {:>8} {:>8} {:>8} {:>7} {:>7} {:>5} {:>7}",
         "luminaire",
         "diam mm",
         "px mm",
         "cell mm",
         "triangles",
         "cover %",
+        "rule",
+        "collapsed",
         "mean",
         "rec→true",
         "true→rec",
@@ -433,13 +457,15 @@ fn header_text() -> String {
 fn row_text(r: &Row) -> String {
     let rep = &r.rec.report;
     format!(
-        "{:<11} {:>8.1} {:>6.2} {:>7.2} {:>9} {:>7.1} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>7.2} {:>7.2} {:>5} {:>7.1}",
+        "{:<11} {:>8.1} {:>6.2} {:>7.2} {:>9} {:>7.1} {:>7} {:>9} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>7.2} {:>7.2} {:>5} {:>7.1}",
         r.name,
         r.diam_mm,
         r.footprint_mm,
         rep.voxel_m * 1e3,
         rep.triangles,
         rep.coverage * 100.0,
+        rule_name(rep),
+        rep.collapsed_vertices,
         r.mean_mm,
         r.rec_to_true_mm,
         r.true_to_rec_mm,
@@ -455,13 +481,13 @@ fn row_text(r: &Row) -> String {
 fn table_csv(rows: &[Row], args: &ProxyArgs) -> String {
     let mut s = format!(
         "# lumiview proxy --synth: layout {}, {} px, supersample {}; Chamfer distances in mm\n\
-         luminaire,diameter_mm,footprint_mm,cell_mm,cameras_used,triangles,coverage,chamfer_mean_mm,rec_to_true_mm,true_to_rec_mm,chamfer_p95_mm,chamfer_max_mm,p95_percent_of_diameter,limit_mm,pass,seconds\n",
+         luminaire,diameter_mm,footprint_mm,cell_mm,cameras_used,triangles,coverage,rule,collapsed_vertices,chamfer_mean_mm,rec_to_true_mm,true_to_rec_mm,chamfer_p95_mm,chamfer_max_mm,p95_percent_of_diameter,limit_mm,pass,seconds\n",
         args.layout, args.size, args.supersample
     );
     for r in rows {
         let rep = &r.rec.report;
         s.push_str(&format!(
-            "{},{:.2},{:.3},{:.3},{},{},{:.4},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{:.2}\n",
+            "{},{:.2},{:.3},{:.3},{},{},{:.4},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{:.2}\n",
             r.name,
             r.diam_mm,
             r.footprint_mm,
@@ -469,6 +495,8 @@ fn table_csv(rows: &[Row], args: &ProxyArgs) -> String {
             rep.cameras_used,
             rep.triangles,
             rep.coverage,
+            rule_name(rep),
+            rep.collapsed_vertices,
             r.mean_mm,
             r.rec_to_true_mm,
             r.true_to_rec_mm,
