@@ -39,7 +39,7 @@ fn tmp(name: &str) -> PathBuf {
 /// Chamfer distance (mm) to the true proxy within half the limit (1 % of the bounding
 /// diameter or two capture-pixel footprints), the flat parts collapsed onto their middle, and nearly
 /// all lit pixels explained. Measured (this set-up): disc mean 0.47 mm, p95 1.12 mm (limit 5.57),
-/// coverage 1.000; two-planes mean 0.96 mm, p95 2.64 mm (limit 6.66), coverage 0.997. Before the
+/// coverage 1.000; two-planes mean 0.91 mm, p95 2.15 mm (limit 6.66), coverage 0.997. Before the
 /// collapse and the pixel-overlap mask: 2.10 / 4.52 mm and 3.14 / 4.95 mm.
 #[test]
 fn reconstruction_is_near_the_true_proxy() {

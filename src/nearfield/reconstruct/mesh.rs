@@ -429,11 +429,36 @@ pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> 
             disp[i] = sum / k;
         }
     }
+    // A thin part's rim stays where carving left it (its inward line runs along the part), a skirt
+    // as tall as the lens is thick there that stands out at grazing views. Rings of unmoved vertices
+    // next to moved ones take their neighbours' mean move, so the skirt folds onto the middle too.
+    let mut done: Vec<bool> = moves.iter().map(Option::is_some).collect();
+    for _ in 0..RIM_RINGS {
+        let ring: Vec<(usize, DVec3)> = neighbours
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| !done[i])
+            .filter_map(|(i, nb)| {
+                let (sum, k) = nb
+                    .iter()
+                    .filter(|&&j| done[j as usize])
+                    .fold((DVec3::ZERO, 0.0), |(s, k), &j| (s + disp[j as usize], k + 1.0));
+                (k > 0.0).then(|| (i, sum / k))
+            })
+            .collect();
+        for (i, d) in ring {
+            disp[i] = d;
+            done[i] = true;
+        }
+    }
     for (v, d) in mesh.vertices.iter_mut().zip(disp) {
         *v += d;
     }
     moved
 }
+
+/// Rings of vertices around a collapsed part that follow its moves ([`collapse_thin`]).
+const RIM_RINGS: usize = 3;
 
 /// Area-weighted vertex normals (unit, outward for a mesh wound outwards; zero where undefined).
 fn vertex_normals(mesh: &Mesh) -> Vec<DVec3> {
