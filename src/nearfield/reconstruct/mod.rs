@@ -349,43 +349,36 @@ pub fn reconstruct(
         .ceil() as u32;
     let levels = want.clamp(1, max_levels);
     let grazing = opts.grazing_deg.to_radians().sin();
-    let rules = [
-        (carve::Rule::OneSided { grazing }, opts.thin_fraction),
-        (carve::Rule::Directional, DIRECTIONAL_THIN_FRACTION),
-    ];
-    let mut best: Option<Attempt> = None;
-    let (mut carve_s, mut mesh_s) = (0.0, 0.0);
-    for (k, &(rule, thin_fraction)) in rules.iter().enumerate() {
-        if k > 0 && (!opts.directional_fallback || best.as_ref().is_some_and(|b| b.coverage >= MIN_COVERAGE)) {
-            break;
-        }
+    let run = |rule: carve::Rule, thin_fraction: f64, stage: &str| {
         let t = Instant::now();
         let occupancy = carve::carve(&views, centre, content, content, levels, rule, &|d, t| {
-            progress(
-                if k == 0 { "carving" } else { "carving (directional)" },
-                d as usize,
-                t as usize,
-            )
+            progress(stage, d as usize, t as usize)
         });
-        carve_s += t.elapsed().as_secs_f64();
+        let carve_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let attempt = Attempt::mesh(&views, occupancy, rule, thin_fraction * 2.0 * content);
-        mesh_s += t.elapsed().as_secs_f64();
-        if best.as_ref().is_none_or(|b| attempt.coverage > b.coverage) {
-            best = Some(attempt);
+        (attempt, carve_s, t.elapsed().as_secs_f64())
+    };
+    let (mut best, mut carve_s, mut mesh_s) = run(carve::Rule::OneSided { grazing }, opts.thin_fraction, "carving");
+    if opts.directional_fallback && best.coverage < MIN_COVERAGE {
+        let (other, c, m) = run(
+            carve::Rule::Directional,
+            DIRECTIONAL_THIN_FRACTION,
+            "carving (directional)",
+        );
+        (carve_s, mesh_s) = (carve_s + c, mesh_s + m);
+        if other.coverage > best.coverage {
+            best = other;
         }
     }
-    let Some(Attempt {
+    let Attempt {
         occupancy,
         mesh,
         rule,
         coverage,
         collapsed_vertices,
         collapsed_coverage,
-    }) = best
-    else {
-        unreachable!("the first rule always runs")
-    };
+    } = best;
     let report = ReconstructReport {
         cameras_read: chosen.len(),
         cameras_used: views.len(),
