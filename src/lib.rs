@@ -4,6 +4,8 @@
 //! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
 //! - [`nearfield`]: near-field scans (pure CPU).
 //! - [`files`]: reading files with limits, writing outputs through temporary files (pure CPU).
+//! - [`scene`]: scene lighting's CPU layer: glTF scenes, luminaire placement, ray queries and the
+//!   reference path tracer (pure CPU).
 //! - [`source`]: any luminaire file: its kind and the one dispatch to its reader (pure CPU).
 //! - [`draw`]: text with the bundled font and the GLB container, for plots, pictures and meshes
 //!   (pure CPU, a leaf).
@@ -21,4 +23,5 @@ pub mod gpu;
 pub mod interop;
 pub mod nearfield;
 pub mod photometry;
+pub mod scene;
 pub mod source;

@@ -1,0 +1,21 @@
+//! Scene lighting's pure-CPU foundation (issue 20): glTF scenes, luminaires placed in them, ray
+//! queries, and the reference path tracer that gives illuminance per bounce. No wgpu, no unsafe.
+//!
+//! - [`load`]: a glTF 2.0 scene → [`Scene`] (world-space triangles in metres, +Y up, diffuse
+//!   materials with base-colour textures), hostile files as errors.
+//! - [`model`]: the [`Scene`] and its reflectance at a point (RGB and the scalar ρ_Y).
+//! - [`texture`]: PNG base-colour textures and their sampling.
+//! - [`place`]: `@X,Y,Z[,YAW]` → the luminaire-frame → scene matrix.
+//!
+//! Conventions and measured accuracy: docs/scene-lighting.md.
+
+pub mod error;
+pub mod load;
+pub mod model;
+pub mod place;
+pub mod texture;
+
+pub use error::SceneError;
+pub use load::{load, load_from_slice};
+pub use model::{Aabb, Material, Scene, SceneParts};
+pub use place::{placement, Placement};
