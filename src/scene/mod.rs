@@ -6,16 +6,28 @@
 //! - [`model`]: the [`Scene`] and its reflectance at a point (RGB and the scalar ρ_Y).
 //! - [`texture`]: PNG base-colour textures and their sampling.
 //! - [`place`]: `@X,Y,Z[,YAW]` → the luminaire-frame → scene matrix.
+//! - [`bvh`]: the hierarchy for closest-hit and shadow queries.
+//! - [`emitter`]: photometric luminaires as point or area sources.
+//! - [`reference`]: the path tracer ([`reference::illuminance`], [`reference::PerBounce`]).
+//! - [`grid`]: work-plane grids and their CSV.
+//! - [`sampling`]: the random numbers (PCG32) and direction sampling.
 //!
 //! Conventions and measured accuracy: docs/scene-lighting.md.
 
+pub mod bvh;
+pub mod emitter;
 pub mod error;
+pub mod grid;
 pub mod load;
 pub mod model;
 pub mod place;
+pub mod reference;
+pub mod sampling;
 pub mod texture;
 
+pub use emitter::SceneLuminaire;
 pub use error::SceneError;
 pub use load::{load, load_from_slice};
 pub use model::{Aabb, Material, Scene, SceneParts};
 pub use place::{placement, Placement};
+pub use reference::{illuminance, PerBounce, SurfacePoint, TraceOptions, Tracer};
