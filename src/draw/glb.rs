@@ -23,11 +23,19 @@ impl Buffer {
 
     /// Appends `data` as a buffer view on 4-byte alignment and returns the view's index.
     pub fn push_view(&mut self, data: &[u8], target: u32) -> usize {
+        let i = self.push_data(data);
+        self.views[i]["target"] = json!(target);
+        i
+    }
+
+    /// Appends `data` as a buffer view without a `target` (what glTF asks of views that are not
+    /// vertex or index data, such as an embedded image) and returns the view's index.
+    pub fn push_data(&mut self, data: &[u8]) -> usize {
         while !self.bin.len().is_multiple_of(4) {
             self.bin.push(0);
         }
         self.views
-            .push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": data.len(), "target": target}));
+            .push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": data.len()}));
         self.bin.extend_from_slice(data);
         self.views.len() - 1
     }
@@ -88,7 +96,12 @@ mod tests {
         assert_eq!(b.push_view(&[1, 2, 3], ARRAY_BUFFER), 0);
         assert_eq!(b.push_view(&[4; 8], ELEMENT_ARRAY_BUFFER), 1);
         assert_eq!(b.views()[1]["byteOffset"], 4, "the second view starts on 4 bytes");
+        assert_eq!(b.views()[1]["target"], ELEMENT_ARRAY_BUFFER);
         assert_eq!(b.len(), 12);
+        assert_eq!(b.push_data(&[9; 5]), 2);
+        assert!(b.views()[2].get("target").is_none(), "an image's view has no target");
+        assert_eq!(b.views()[2]["byteOffset"], 12);
+        assert_eq!(b.len(), 17);
         let glb = b.into_glb(&json!({"asset": {"version": "2.0"}})).unwrap();
         assert_eq!(&glb[..4], b"glTF");
         assert_eq!(u32::from_le_bytes(glb[8..12].try_into().unwrap()) as usize, glb.len());
@@ -96,7 +109,7 @@ mod tests {
         assert_eq!(json_len % 4, 0);
         assert_eq!(&glb[16..20], b"JSON");
         let bin_at = 20 + json_len;
-        assert_eq!(u32::from_le_bytes(glb[bin_at..bin_at + 4].try_into().unwrap()), 12);
+        assert_eq!(u32::from_le_bytes(glb[bin_at..bin_at + 4].try_into().unwrap()), 20);
         assert_eq!(&glb[bin_at + 4..bin_at + 8], b"BIN\0");
         assert_eq!(glb.len() % 4, 0);
     }

@@ -11,6 +11,7 @@
 //! - [`reference`]: the path tracer ([`reference::illuminance`], [`reference::PerBounce`]).
 //! - [`grid`]: work-plane grids and their CSV.
 //! - [`sampling`]: the random numbers (PCG32) and direction sampling.
+//! - [`sample`]: the generated sample scenes (the office shipped as `assets/scenes/office.glb`).
 //!
 //! Conventions and measured accuracy: docs/scene-lighting.md.
 
@@ -22,6 +23,7 @@ pub mod load;
 pub mod model;
 pub mod place;
 pub mod reference;
+pub mod sample;
 pub mod sampling;
 pub mod texture;
 
