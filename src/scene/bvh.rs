@@ -8,7 +8,9 @@
 //!   [`MAX_DEPTH`] (then the leaf holds the rest: slower, never wrong). The build is iterative, so no input can exhaust the call stack, and the
 //!   traversal's fixed stack of [`MAX_DEPTH`] entries cannot overflow.
 //! - In f64 throughout: triangles are tested by Möller–Trumbore (a hit needs barycentrics u, v ≥ 0,
-//!   u + v ≤ 1 and t inside the open interval (0, `t_max`)); degenerate triangles are never hit.
+//!   u + v ≤ 1, each within [`BARY_TOLERANCE`] so that no ray slips between triangles sharing an
+//!   edge or a vertex, and t inside the open interval (0, `t_max`)); degenerate triangles are
+//!   never hit.
 //!   Callers move ray origins off the surface they leave ([`offset_m`]), so there is no hidden
 //!   `t_min` here. Surfaces are hit from both sides.
 //! - The module separates the hierarchy from the scene's order: hits report the scene's own
@@ -105,7 +107,7 @@ impl Bvh {
             depth = depth.max(b.depth);
             let items = &mut order[b.start..b.end];
             let bounds = items.iter().fold(Aabb::EMPTY, |a, &i| a.union(boxes[i as usize]));
-            nodes[b.node].bounds = bounds;
+            nodes[b.node].bounds = padded(bounds);
             let n = items.len();
             let split = if n <= MAX_LEAF || b.depth >= MAX_DEPTH {
                 None
@@ -174,15 +176,13 @@ impl Bvh {
 
     /// The closest triangle hit by the ray `origin + t dir`, 0 < t < `t_max`.
     pub fn closest_hit(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Hit> {
-        let inv = dir.recip();
+        let inv = safe_recip(dir);
         let mut best: Option<Hit> = None;
         let mut t_best = t_max;
         let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         let mut node = 0usize;
-        if slab(&self.nodes[0].bounds, origin, inv, t_best).is_none() {
-            return None;
-        }
+        slab(&self.nodes[0].bounds, origin, inv, t_best)?;
         loop {
             let n = &self.nodes[node];
             if n.count > 0 {
@@ -239,7 +239,7 @@ impl Bvh {
     /// Whether any triangle lies on the ray `origin + t dir`, 0 < t < `t_max` (a shadow ray to a
     /// point at `t_max`).
     pub fn occluded(&self, origin: DVec3, dir: DVec3, t_max: f64) -> bool {
-        let inv = dir.recip();
+        let inv = safe_recip(dir);
         let mut stack = [0u32; MAX_DEPTH];
         let mut sp = 0usize;
         if slab(&self.nodes[0].bounds, origin, inv, t_max).is_none() {
@@ -294,7 +294,7 @@ fn split_sah(items: &mut [u32], boxes: &[Aabb], centroids: &[DVec3]) -> Option<u
         2
     };
     let (lo, width) = (cb.min[axis], ext[axis]);
-    if !(width > 0.0) {
+    if width.is_nan() || width <= 0.0 {
         // Every centroid in one place: halve by order (only to bound the leaf size).
         return (n > 4 * MAX_LEAF).then_some(n / 2);
     }
@@ -341,8 +341,26 @@ fn split_sah(items: &mut [u32], boxes: &[Aabb], centroids: &[DVec3]) -> Option<u
     (mid > 0 && mid < n).then_some(mid)
 }
 
-/// Entry distance of the ray into `b` within [0, t_max], or `None`. NaN products (a zero
-/// direction component on a slab's plane) are ignored by `min`/`max`.
+/// `b` grown on every side by 10⁻⁹ of its largest extent plus 10⁻¹² of its coordinates' size:
+/// more than [`BARY_TOLERANCE`] lets a triangle reach, so a ray that hits a triangle within its
+/// tolerance (through a shared vertex or edge) is never culled by the triangle's box.
+fn padded(b: Aabb) -> Aabb {
+    let scale = b.min.abs().max(b.max.abs()).max_element();
+    let pad = 1e-9 * b.size().max_element() + 1e-12 * (1.0 + scale);
+    Aabb {
+        min: b.min - pad,
+        max: b.max + pad,
+    }
+}
+
+/// 1 / d per component, with a zero component (either sign) read as ±10⁻³⁰⁰ so that the slab test
+/// never multiplies 0 by ∞: a ray parallel to a slab and lying on one of its planes is inside it.
+fn safe_recip(d: DVec3) -> DVec3 {
+    let r = |c: f64| if c == 0.0 { 1e300 } else { 1.0 / c };
+    DVec3::new(r(d.x), r(d.y), r(d.z))
+}
+
+/// Entry distance of the ray into `b` within [0, t_max], or `None` (`inv` from [`safe_recip`]).
 fn slab(b: &Aabb, o: DVec3, inv: DVec3, t_max: f64) -> Option<f64> {
     let t1 = (b.min - o) * inv;
     let t2 = (b.max - o) * inv;
@@ -352,6 +370,10 @@ fn slab(b: &Aabb, o: DVec3, inv: DVec3, t_max: f64) -> Option<f64> {
     let exit = tmax.x.min(tmax.y).min(tmax.z).min(t_max);
     (enter <= exit).then_some(enter)
 }
+
+/// How far outside a triangle, in barycentric units, a hit still counts: a ray through an edge or
+/// a vertex shared by several triangles, whose rounding could put it outside each of them, hits one.
+pub const BARY_TOLERANCE: f64 = 1e-10;
 
 /// Möller–Trumbore: (t, b1, b2) of a hit with 0 < t < t_max.
 fn intersect(tri: &PreTri, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64, f64)> {
@@ -363,12 +385,12 @@ fn intersect(tri: &PreTri, o: DVec3, d: DVec3, t_max: f64) -> Option<(f64, f64, 
     let inv = 1.0 / det;
     let s = o - tri.v0;
     let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    if !(-BARY_TOLERANCE..=1.0 + BARY_TOLERANCE).contains(&u) {
         return None;
     }
     let q = s.cross(tri.e1);
     let v = d.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
+    if v < -BARY_TOLERANCE || u + v > 1.0 + BARY_TOLERANCE {
         return None;
     }
     let t = tri.e2.dot(q) * inv;
@@ -454,6 +476,61 @@ mod tests {
     }
 
     #[test]
+    fn rays_through_shared_vertices_and_edges_hit() {
+        // A fan of 8 triangles around the origin in the plane y = 0 (irrational-ish corners);
+        // rays straight down through the shared centre and through each shared edge's midpoint.
+        let ring: Vec<DVec3> = (0..8)
+            .map(|k| {
+                let a = f64::from(k) * std::f64::consts::TAU / 8.0 + 0.1;
+                DVec3::new(a.cos() * 0.7, 0.0, a.sin() * 0.7)
+            })
+            .collect();
+        let triangles: Vec<[DVec3; 3]> = (0..8).map(|k| [DVec3::ZERO, ring[k], ring[(k + 1) % 8]]).collect();
+        let s = Scene::new(SceneParts {
+            material_of: vec![0; 8],
+            triangles,
+            materials: vec![Material::grey(0.5)],
+            ..Default::default()
+        })
+        .unwrap();
+        let bvh = Bvh::build(&s);
+        let mut targets = vec![DVec3::ZERO];
+        targets.extend(ring.iter().map(|p| *p * 0.5));
+        for t in targets {
+            let o = t + DVec3::new(0.0, 1.3, 0.0);
+            let h = bvh.closest_hit(o, DVec3::NEG_Y, 10.0);
+            assert!(h.is_some_and(|h| (h.t - 1.3).abs() < 1e-12), "through {t}: {h:?}");
+        }
+        // A corner 10⁻¹⁶ m off the ray (as a UV sphere's pole is off its axis): the triangle's box
+        // misses the ray by that much unless padded; the triangle's tolerance takes the hit.
+        let corner = DVec3::new(1.2e-16, 0.0, 0.9e-16);
+        let s = Scene::new(SceneParts {
+            triangles: vec![[corner, DVec3::new(0.7, 0.0, 0.1), DVec3::new(0.1, 0.0, 0.7)]],
+            material_of: vec![0],
+            materials: vec![Material::grey(0.5)],
+            ..Default::default()
+        })
+        .unwrap();
+        let h = Bvh::build(&s).closest_hit(DVec3::new(0.0, 2.0, 0.0), DVec3::NEG_Y, 10.0);
+        assert!(h.is_some_and(|h| h.t == 2.0), "{h:?}");
+    }
+
+    #[test]
+    fn rays_along_a_box_face_plane_enter_the_box() {
+        let b = Aabb {
+            min: DVec3::new(0.0, -1.0, -1.0),
+            max: DVec3::new(1.0, 1.0, 1.0),
+        };
+        let o = DVec3::new(0.0, 5.0, 0.0); // on the plane x = min.x
+        assert_eq!(slab(&b, o, safe_recip(DVec3::NEG_Y), 10.0), Some(4.0));
+        assert_eq!(slab(&b, o, safe_recip(DVec3::new(-0.0, -1.0, 0.0)), 10.0), Some(4.0));
+        assert_eq!(
+            slab(&b, DVec3::new(-1e-9, 5.0, 0.0), safe_recip(DVec3::NEG_Y), 10.0),
+            None
+        );
+    }
+
+    #[test]
     fn coincident_centroids_and_axis_parallel_rays() {
         // 100 copies of one triangle: a leaf, never a split of indistinguishable centroids.
         let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
@@ -465,7 +542,9 @@ mod tests {
         })
         .unwrap();
         let bvh = Bvh::build(&s);
-        let h = bvh.closest_hit(DVec3::new(0.25, 0.25, 1.0), DVec3::NEG_Z, f64::INFINITY).unwrap();
+        let h = bvh
+            .closest_hit(DVec3::new(0.25, 0.25, 1.0), DVec3::NEG_Z, f64::INFINITY)
+            .unwrap();
         assert_eq!(h.t, 1.0);
         assert_eq!((h.b1, h.b2), (0.25, 0.25));
         // From below too (two-sided), and along the plane (never a hit of a degenerate view).

@@ -96,10 +96,16 @@ enum OpeningSampler {
     /// Faces of a box or an EULUMDAT rectangle with sides.
     Faces(Vec<Face>),
     /// EULUMDAT disc with sides (diameter, side heights C0, C90, C180, C270).
-    DiscWithSides { diameter_m: f64, side_heights_m: [f64; 4] },
+    DiscWithSides {
+        diameter_m: f64,
+        side_heights_m: [f64; 4],
+    },
     /// A convex solid centred on the origin: |p_k| ≤ half_k on the slab axes, Σ (p_k/half_k)² ≤ 1
     /// over the quadric axes.
-    Solid { half: DVec3, quadric: [bool; 3] },
+    Solid {
+        half: DVec3,
+        quadric: [bool; 3],
+    },
 }
 
 /// One face: its shape, and its outward normal when it is seen from one side only (`None`: a flat
@@ -215,7 +221,7 @@ impl OpeningSampler {
             OpeningSampler::Flat(f) => f.at(u, v),
             OpeningSampler::Faces(faces) => {
                 let total: f64 = faces.iter().map(|f| f.weight(d)).sum();
-                if !(total > 0.0) {
+                if total.is_nan() || total <= 0.0 {
                     return DVec3::ZERO;
                 }
                 let mut pick = rng.next_f64() * total;
@@ -226,7 +232,11 @@ impl OpeningSampler {
                     }
                     pick -= wgt;
                 }
-                faces.iter().rev().find(|f| f.weight(d) > 0.0).map_or(DVec3::ZERO, |f| f.flat.at(u, v))
+                faces
+                    .iter()
+                    .rev()
+                    .find(|f| f.weight(d) > 0.0)
+                    .map_or(DVec3::ZERO, |f| f.flat.at(u, v))
             }
             OpeningSampler::DiscWithSides {
                 diameter_m,
@@ -332,9 +342,14 @@ impl Emitter {
                 }
                 let r = DMat3::from_mat4(m);
                 let gram = r.transpose() * r;
-                let off = (gram - DMat3::IDENTITY).to_cols_array().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                let off = (gram - DMat3::IDENTITY)
+                    .to_cols_array()
+                    .iter()
+                    .fold(0.0f64, |a, x| a.max(x.abs()));
                 if off > 1e-6 {
-                    return Err(bad("the model matrix scales or shears; it must be a rotation and a translation"));
+                    return Err(bad(
+                        "the model matrix scales or shears; it must be a rotation and a translation",
+                    ));
                 }
                 if r.determinant() < 0.0 {
                     return Err(bad("the model matrix mirrors; it must be a rotation and a translation"));
@@ -374,7 +389,7 @@ impl Emitter {
         rng: &mut Pcg32,
     ) -> f64 {
         if self.is_point() {
-            return self.from_point(bvh, x, n, self.centre, offset_m);
+            return self.light_from_point(bvh, x, n, self.centre, offset_m);
         }
         let to_x = self.luminaire_from_scene * (x - self.centre);
         let d = to_x.normalize_or_zero();
@@ -389,17 +404,17 @@ impl Emitter {
                 let v = (j as f64 + rng.next_f64()) / m as f64;
                 let p = self.sampler.sample(d, u, v, rng);
                 let s = self.scene_from_luminaire.transform_point3(p);
-                sum += self.from_point(bvh, x, n, s, offset_m);
+                sum += self.light_from_point(bvh, x, n, s, offset_m);
             }
         }
         sum / (m * m) as f64
     }
 
     /// I(s → x) · cos i / r², 0 when blocked: the light from a point `s` of the luminaire.
-    fn from_point(&self, bvh: &Bvh, x: DVec3, n: DVec3, s: DVec3, offset_m: f64) -> f64 {
+    fn light_from_point(&self, bvh: &Bvh, x: DVec3, n: DVec3, s: DVec3, offset_m: f64) -> f64 {
         let v = s - x;
         let r2 = v.length_squared();
-        if !(r2 > 0.0) {
+        if r2.is_nan() || r2 <= 0.0 {
             return 0.0;
         }
         let r = r2.sqrt();
@@ -408,7 +423,7 @@ impl Emitter {
             return 0.0;
         }
         let cd = self.intensity_towards(-v);
-        if !(cd > 0.0) {
+        if cd.is_nan() || cd <= 0.0 {
             return 0.0;
         }
         let o = x + n * offset_m;
@@ -450,10 +465,18 @@ mod tests {
         let disc = OpeningSampler::of(&LuminousOpening::new(OpeningShape::Ellipse, 0.4, 0.4, 0.0));
         let (_, lo, hi) = centroid_and_spread(&disc, DVec3::NEG_Z, 400);
         assert!(hi.x < 0.2 && hi.x > 0.18 && lo.y > -0.2);
-        let c0 = OpeningSampler::of(&LuminousOpening::new(OpeningShape::VerticalEllipseFacingC0, 0.0, 0.3, 0.2));
+        let c0 = OpeningSampler::of(&LuminousOpening::new(
+            OpeningShape::VerticalEllipseFacingC0,
+            0.0,
+            0.3,
+            0.2,
+        ));
         let (_, lo, hi) = centroid_and_spread(&c0, DVec3::X, 400);
         assert!(lo.x == 0.0 && hi.x == 0.0 && hi.z > 0.09 && hi.y > 0.14);
-        assert!(matches!(OpeningSampler::of(&LuminousOpening::point()), OpeningSampler::Point));
+        assert!(matches!(
+            OpeningSampler::of(&LuminousOpening::point()),
+            OpeningSampler::Point
+        ));
     }
 
     #[test]
@@ -491,7 +514,12 @@ mod tests {
             }
         }
         // A long thin cylinder end-on: all points on the end cap facing d.
-        let c = OpeningSampler::of(&LuminousOpening::new(OpeningShape::HorizontalCylinderAlongLength, 1.2, 0.05, 0.05));
+        let c = OpeningSampler::of(&LuminousOpening::new(
+            OpeningShape::HorizontalCylinderAlongLength,
+            1.2,
+            0.05,
+            0.05,
+        ));
         for _ in 0..100 {
             let p = c.sample(DVec3::X, 0.5, 0.5, &mut rng);
             assert!((p.x - 0.6).abs() < 1e-12 && p.y.hypot(p.z) <= 0.025 + 1e-12, "{p}");
@@ -512,7 +540,9 @@ mod tests {
             (DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0)), "mirrors"),
             (DMat4::from_cols_array(&[f64::NAN; 16]), "not finite"),
         ] {
-            let e = Emitter::prepare(&[lum(DMat4::IDENTITY), lum(m)]).unwrap_err().to_string();
+            let e = Emitter::prepare(&[lum(DMat4::IDENTITY), lum(m)])
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("luminaires[1]") && e.contains(why), "{e}");
         }
     }

@@ -49,7 +49,7 @@ impl FloorRect {
             z_min_m: bounds.min.z + margin_m,
             z_max_m: bounds.max.z - margin_m,
         };
-        if !(margin_m.is_finite() && margin_m >= 0.0) || !(r.x_max_m > r.x_min_m && r.z_max_m > r.z_min_m) {
+        if !(margin_m.is_finite() && margin_m >= 0.0 && r.x_max_m > r.x_min_m && r.z_max_m > r.z_min_m) {
             return Err(SceneError::invalid(
                 "margin",
                 format!(
@@ -66,9 +66,9 @@ impl FloorRect {
 /// The points of the work plane y = `height_m` over `rect`, cell centres at most `spacing_m`
 /// apart, normals +Y.
 ///
-/// Errors: a height that is not finite (argument `height`); a spacing that is not finite and
-/// > 0 (argument `spacing`); a rectangle that is empty or not finite (argument `rect`); more than
-/// [`MAX_GRID_POINTS`] points (argument `spacing`).
+/// Errors: a height that is not finite (argument `height`); a spacing that is not a finite number
+/// greater than 0 (argument `spacing`); a rectangle that is empty or not finite (argument `rect`);
+/// more than [`MAX_GRID_POINTS`] points (argument `spacing`).
 pub fn work_plane_grid(rect: &FloorRect, height_m: f64, spacing_m: f64) -> Result<Vec<SurfacePoint>> {
     if !height_m.is_finite() {
         return Err(SceneError::invalid("height", format!("{height_m} m is not finite")));
@@ -164,8 +164,14 @@ mod tests {
             let e = work_plane_grid(&r, 0.8, bad).unwrap_err().to_string();
             assert!(e.contains(arg), "{e}");
         }
-        assert!(work_plane_grid(&r, f64::INFINITY, 0.5).unwrap_err().to_string().contains("height"));
-        assert!(FloorRect::of_bounds(&b, 2.0).unwrap_err().to_string().contains("margin"));
+        assert!(work_plane_grid(&r, f64::INFINITY, 0.5)
+            .unwrap_err()
+            .to_string()
+            .contains("height"));
+        assert!(FloorRect::of_bounds(&b, 2.0)
+            .unwrap_err()
+            .to_string()
+            .contains("margin"));
         assert!(FloorRect::of_bounds(&b, -0.1).is_err());
     }
 
@@ -182,7 +188,10 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let f = dir.join("grid.csv");
         write_grid_csv(&f, &p, &[1.0]).unwrap();
-        assert_eq!(std::fs::read_to_string(&f).unwrap(), "x_m,y_m,z_m,E_lx\n1.0000,0.7500,-0.2500,1.000\n");
+        assert_eq!(
+            std::fs::read_to_string(&f).unwrap(),
+            "x_m,y_m,z_m,E_lx\n1.0000,0.7500,-0.2500,1.000\n"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -19,9 +19,9 @@
 //!   checked before `gltf` sees it; accessors are read here, not by `gltf`'s reader, with every
 //!   offset, stride and count checked against its buffer view and buffer; indices are checked
 //!   against the vertex count; positions and transforms must be finite; triangles are limited to
-//!   [`super::model::MAX_TRIANGLES`] and node visits to [`MAX_NODE_VISITS`] (a cyclic or
-//!   exponentially shared hierarchy is an error). Sparse accessors, quantized positions and
-//!   non-file URIs are refused as unsupported.
+//!   [`super::model::MAX_TRIANGLES`]; a node reached twice (a cycle, or two parents, which glTF
+//!   forbids) is an error. Sparse accessors, quantized positions and URIs with a scheme other than
+//!   `data:` are refused as unsupported.
 
 use std::path::{Path, PathBuf};
 
@@ -38,16 +38,14 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// Most bytes all buffers together may hold (2 GiB).
 pub const MAX_TOTAL_BUFFER_BYTES: u64 = 2 << 30;
 
-/// Most node visits while walking the hierarchy.
-pub const MAX_NODE_VISITS: usize = 1_000_000;
-
 /// Loads the glTF scene at `path` ([`load_from_slice`] with the file's folder for its relative
 /// URIs).
 ///
 /// Errors: I/O ([`SceneError::Io`] naming the file, or the buffer or image file it names), and
 /// every format error of [`load_from_slice`].
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = crate::files::read_regular(path, MAX_SCENE_BYTES, "a glTF scene").map_err(|e| SceneError::io(path, e))?;
+    let bytes =
+        crate::files::read_regular(path, MAX_SCENE_BYTES, "a glTF scene").map_err(|e| SceneError::io(path, e))?;
     let base = path.parent().unwrap_or(Path::new("."));
     load_from_slice(&bytes, path, Some(base))
 }
@@ -59,7 +57,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// GLB, a buffer or image missing or too short, accessors out of their views, indices out of
 /// range, non-finite positions or transforms, an unreadable PNG texture, unsupported features
 /// (sparse accessors, quantized positions, URIs with a scheme other than `data:`), too many
-/// triangles or nodes, no triangles.
+/// triangles, a node hierarchy that is not a forest, no triangles.
 pub fn load_from_slice(bytes: &[u8], path: &Path, base_dir: Option<&Path>) -> Result<Scene> {
     let bad = |m: String| SceneError::format(path, m);
     check_glb_header(bytes).map_err(bad)?;
@@ -89,17 +87,23 @@ pub fn load_from_slice(bytes: &[u8], path: &Path, base_dir: Option<&Path>) -> Re
                     }
                 }
             }
-            gltf.nodes().filter(|n| !is_child.get(n.index()).copied().unwrap_or(false)).collect()
+            gltf.nodes()
+                .filter(|n| !is_child.get(n.index()).copied().unwrap_or(false))
+                .collect()
         }
     };
     let mut stack: Vec<(gltf::Node, DMat4)> = roots.into_iter().rev().map(|n| (n, DMat4::IDENTITY)).collect();
-    let mut visits = 0usize;
+    // glTF's hierarchy is a forest: a node reached twice has two parents or lies on a cycle.
+    let mut visited = vec![false; gltf.nodes().len()];
     while let Some((node, parent)) = stack.pop() {
-        visits += 1;
-        if visits > MAX_NODE_VISITS {
-            return Err(bad(format!(
-                "more than {MAX_NODE_VISITS} node visits: the node hierarchy is cyclic or too large"
-            )));
+        match visited.get_mut(node.index()) {
+            Some(v) if !*v => *v = true,
+            _ => {
+                return Err(bad(format!(
+                    "node {} is reached twice: the node hierarchy has a cycle or a node with two parents",
+                    node.index()
+                )))
+            }
         }
         let local = DMat4::from_cols_array_2d(&node.transform().matrix().map(|c| c.map(f64::from)));
         let world = parent * local;
@@ -154,7 +158,11 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     if !bytes.starts_with(b"glTF") {
         return Ok(());
     }
-    let word = |at: usize| bytes.get(at..at + 4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
     let (Some(version), Some(length)) = (word(4), word(8)) else {
         return Err(format!("truncated GLB header: {} bytes", bytes.len()));
     };
@@ -230,7 +238,9 @@ impl Loader<'_> {
     /// Reads a file a URI names, beside the scene.
     fn read_uri_file(&self, uri: &str, what: &str) -> Result<Vec<u8>> {
         let Some(base) = self.base_dir else {
-            return Err(self.bad(format!("{what} refers to the file \"{uri}\", but the scene was given as bytes")));
+            return Err(self.bad(format!(
+                "{what} refers to the file \"{uri}\", but the scene was given as bytes"
+            )));
         };
         let rel = percent_decode(uri).ok_or_else(|| self.bad(format!("{what}: bad URI \"{uri}\"")))?;
         if has_uri_scheme(uri) || Path::new(&rel).is_absolute() {
@@ -239,7 +249,8 @@ impl Loader<'_> {
             )));
         }
         let file: PathBuf = base.join(rel);
-        crate::files::read_regular(&file, MAX_SCENE_BYTES, "a glTF buffer or image").map_err(|e| SceneError::io(&file, e))
+        crate::files::read_regular(&file, MAX_SCENE_BYTES, "a glTF buffer or image")
+            .map_err(|e| SceneError::io(&file, e))
     }
 
     fn read_buffers(&mut self, gltf: &gltf::Gltf) -> Result<()> {
@@ -252,7 +263,9 @@ impl Loader<'_> {
                     .clone()
                     .ok_or_else(|| self.bad(format!("{what} refers to a GLB binary chunk the file lacks")))?,
                 gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
-                    Some(rest) => decode_data_uri(rest).ok_or_else(|| self.bad(format!("{what}: bad base64 data URI")))?,
+                    Some(rest) => {
+                        decode_data_uri(rest).ok_or_else(|| self.bad(format!("{what}: bad base64 data URI")))?
+                    }
                     None => self.read_uri_file(uri, &what)?,
                 },
             };
@@ -309,7 +322,9 @@ impl Loader<'_> {
             return Err(self.bad(format!("{what} has no elements")));
         }
         if stride < elem {
-            return Err(self.bad(format!("{what}: stride {stride} is shorter than an element ({elem} bytes)")));
+            return Err(self.bad(format!(
+                "{what}: stride {stride} is shorter than an element ({elem} bytes)"
+            )));
         }
         let end = (count - 1)
             .checked_mul(stride)
@@ -476,7 +491,11 @@ impl Loader<'_> {
                         pos.count
                     )));
                 }
-                Some((0..uv.count).map(|i| [uv.component(i, 0) as f32, uv.component(i, 1) as f32]).collect())
+                Some(
+                    (0..uv.count)
+                        .map(|i| [uv.component(i, 0) as f32, uv.component(i, 1) as f32])
+                        .collect(),
+                )
             }
         };
         let indices: Vec<u32> = match prim.indices() {
@@ -514,7 +533,9 @@ impl Loader<'_> {
                     }
                 })
                 .collect(),
-            Mode::TriangleFan => (2..indices.len()).map(|i| [indices[0], indices[i - 1], indices[i]]).collect(),
+            Mode::TriangleFan => (2..indices.len())
+                .map(|i| [indices[0], indices[i - 1], indices[i]])
+                .collect(),
             _ => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
         };
         if parts.triangles.len() + triples.len() > MAX_TRIANGLES {
@@ -622,7 +643,10 @@ mod tests {
         assert_eq!(decode_base64("AAEC").unwrap(), vec![0, 1, 2]);
         assert!(decode_base64("a$==").is_none());
         assert!(decode_base64("AAECA").is_none());
-        assert_eq!(decode_data_uri("application/octet-stream;base64,AAEC").unwrap(), vec![0, 1, 2]);
+        assert_eq!(
+            decode_data_uri("application/octet-stream;base64,AAEC").unwrap(),
+            vec![0, 1, 2]
+        );
         assert_eq!(percent_decode("my%20scene.bin").unwrap(), "my scene.bin");
         assert!(percent_decode("bad%2").is_none());
         assert!(percent_decode("bad%zz").is_none());

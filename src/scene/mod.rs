@@ -1,14 +1,14 @@
 //! Scene lighting's pure-CPU foundation (issue 20): glTF scenes, luminaires placed in them, ray
 //! queries, and the reference path tracer that gives illuminance per bounce. No wgpu, no unsafe.
 //!
-//! - [`load`]: a glTF 2.0 scene → [`Scene`] (world-space triangles in metres, +Y up, diffuse
+//! - [`mod@load`]: a glTF 2.0 scene → [`Scene`] (world-space triangles in metres, +Y up, diffuse
 //!   materials with base-colour textures), hostile files as errors.
 //! - [`model`]: the [`Scene`] and its reflectance at a point (RGB and the scalar ρ_Y).
 //! - [`texture`]: PNG base-colour textures and their sampling.
 //! - [`place`]: `@X,Y,Z[,YAW]` → the luminaire-frame → scene matrix.
 //! - [`bvh`]: the hierarchy for closest-hit and shadow queries.
 //! - [`emitter`]: photometric luminaires as point or area sources.
-//! - [`reference`]: the path tracer ([`reference::illuminance`], [`reference::PerBounce`]).
+//! - [`mod@reference`]: the path tracer ([`illuminance`], [`PerBounce`]).
 //! - [`grid`]: work-plane grids and their CSV.
 //! - [`sampling`]: the random numbers (PCG32) and direction sampling.
 //! - [`sample`]: the generated sample scenes (the office shipped as `assets/scenes/office.glb`).

@@ -284,7 +284,10 @@ mod tests {
         let mut p = one_triangle();
         p.materials[0].base_color_factor[2] = 1.5;
         assert!(Scene::new(p).is_err());
-        assert!(Scene::new(SceneParts::default()).unwrap_err().to_string().contains("no triangles"));
+        assert!(Scene::new(SceneParts::default())
+            .unwrap_err()
+            .to_string()
+            .contains("no triangles"));
     }
 
     #[test]

@@ -116,8 +116,14 @@ mod tests {
         assert!(close(m.transform_vector3(DVec3::Y), DVec3::NEG_Z), "C90 → −Z at yaw 0");
         assert!(close(m.transform_point3(DVec3::ZERO), DVec3::new(1.0, 2.5, -3.0)));
         let m90 = placement(0.0, 0.0, 0.0, 90.0);
-        assert!(close(m90.transform_vector3(DVec3::X), DVec3::NEG_Z), "C0 → −Z at yaw 90");
-        assert!(close(m90.transform_vector3(DVec3::NEG_Z), DVec3::NEG_Y), "yaw keeps the nadir");
+        assert!(
+            close(m90.transform_vector3(DVec3::X), DVec3::NEG_Z),
+            "C0 → −Z at yaw 90"
+        );
+        assert!(
+            close(m90.transform_vector3(DVec3::NEG_Z), DVec3::NEG_Y),
+            "yaw keeps the nadir"
+        );
         // Counter-clockwise seen from above (+Y towards the viewer, looking down): +X turns
         // towards −Z, which is "up the page" when X points right and Z towards the viewer.
         let m30 = placement(0.0, 0.0, 0.0, 30.0);

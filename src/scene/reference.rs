@@ -144,7 +144,10 @@ impl<'s> Tracer<'s> {
             if !p.position_m.is_finite() || n == DVec3::ZERO || !n.is_finite() {
                 return Err(SceneError::invalid(
                     format!("points[{i}]"),
-                    format!("position {} and normal {} must be finite, the normal non-zero", p.position_m, p.normal),
+                    format!(
+                        "position {} and normal {} must be finite, the normal non-zero",
+                        p.position_m, p.normal
+                    ),
                 ));
             }
             unit.push(SurfacePoint {
@@ -217,7 +220,7 @@ impl<'s> Tracer<'s> {
             }
             let rho = self.scene.reflectance_y(hit.triangle, hit.b1, hit.b2);
             beta *= rho;
-            if !(beta > 0.0) {
+            if beta.is_nan() || beta <= 0.0 {
                 break;
             }
             let e = beta * self.direct_lx(y, ng, 1, rng);

@@ -44,7 +44,14 @@ pub const OFFICE_LUMINAIRES: [Placement; 6] = {
             yaw_deg: 0.0,
         }
     }
-    [at(-2.0, -1.0), at(0.0, -1.0), at(2.0, -1.0), at(-2.0, 1.0), at(0.0, 1.0), at(2.0, 1.0)]
+    [
+        at(-2.0, -1.0),
+        at(0.0, -1.0),
+        at(2.0, -1.0),
+        at(-2.0, 1.0),
+        at(0.0, 1.0),
+        at(2.0, 1.0),
+    ]
 };
 
 /// The rug's checker texels (sRGB), left and right of the first row; the second row swaps them.
@@ -310,7 +317,12 @@ pub fn office() -> SampleScene {
     // Facing +Y: (x0, z1) → (x1, z1) → (x1, z0) → (x0, z0) is counter-clockwise seen from above.
     rug.quad(
         [v(x0, y, z1), v(x1, y, z1), v(x1, y, z0), v(x0, y, z0)],
-        [[0.0, (z1 - z0) * k], [(x1 - x0) * k, (z1 - z0) * k], [(x1 - x0) * k, 0.0], [0.0, 0.0]],
+        [
+            [0.0, (z1 - z0) * k],
+            [(x1 - x0) * k, (z1 - z0) * k],
+            [(x1 - x0) * k, 0.0],
+            [0.0, 0.0],
+        ],
     );
     // Rug coordinates relative to the node below (translation z −1.0).
     for p in &mut rug.positions {
@@ -403,7 +415,10 @@ pub fn office_with_statues() -> SampleScene {
     ];
     s.roots.push(NodeDef {
         name: "statues",
-        children: spots.iter().map(|&[x, z]| NodeDef::leaf("statue", mesh, [x, 0.0, z], 0)).collect(),
+        children: spots
+            .iter()
+            .map(|&[x, z]| NodeDef::leaf("statue", mesh, [x, 0.0, z], 0))
+            .collect(),
         ..Default::default()
     });
     s
@@ -444,7 +459,8 @@ impl SampleScene {
     /// Number of triangles in the scene (instances counted).
     pub fn triangle_count(&self) -> usize {
         fn count(s: &SampleScene, n: &NodeDef) -> usize {
-            n.mesh.map_or(0, |m| s.meshes[m].parts.iter().map(Part::triangle_count).sum())
+            n.mesh
+                .map_or(0, |m| s.meshes[m].parts.iter().map(Part::triangle_count).sum())
                 + n.children.iter().map(|c| count(s, c)).sum::<usize>()
         }
         self.roots.iter().map(|r| count(self, r)).sum()
@@ -477,14 +493,18 @@ impl SampleScene {
                 if textured {
                     let uv = part.uvs.iter().flat_map(|u| [u[0] as f32, u[1] as f32]);
                     let view = buf.push_view(&le_bytes(uv), ARRAY_BUFFER);
-                    accessors.push(json!({"bufferView": view, "componentType": 5126, "count": part.uvs.len(),
-                        "type": "VEC2"}));
+                    accessors.push(
+                        json!({"bufferView": view, "componentType": 5126, "count": part.uvs.len(),
+                        "type": "VEC2"}),
+                    );
                     attributes["TEXCOORD_0"] = json!(accessors.len() - 1);
                 }
                 let ix: Vec<u8> = part.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
                 let view = buf.push_view(&ix, ELEMENT_ARRAY_BUFFER);
-                accessors.push(json!({"bufferView": view, "componentType": 5125, "count": part.indices.len(),
-                    "type": "SCALAR"}));
+                accessors.push(
+                    json!({"bufferView": view, "componentType": 5125, "count": part.indices.len(),
+                    "type": "SCALAR"}),
+                );
                 prims.push(json!({"attributes": attributes, "indices": accessors.len() - 1,
                     "material": part.material, "mode": 4}));
             }
@@ -604,7 +624,10 @@ mod tests {
         assert_eq!(s.len(), 12 * (2 * 8 - 2));
         assert!(s.iter().map(area_normal).sum::<DVec3>().length() < 1e-12);
         for t in &s {
-            assert!(area_normal(t).dot((t[0] + t[1] + t[2]) / 3.0 - v(1.0, 2.0, 3.0)) < 0.0, "inward");
+            assert!(
+                area_normal(t).dot((t[0] + t[1] + t[2]) / 3.0 - v(1.0, 2.0, 3.0)) < 0.0,
+                "inward"
+            );
         }
     }
 
@@ -615,7 +638,7 @@ mod tests {
                 quarter_turns: k,
                 ..Default::default()
             };
-            let q = n.rotation().map_or(glam::DQuat::IDENTITY, |q| glam::DQuat::from_array(q));
+            let q = n.rotation().map_or(glam::DQuat::IDENTITY, glam::DQuat::from_array);
             let want = glam::DQuat::from_rotation_y(f64::from(k) * std::f64::consts::FRAC_PI_2);
             for p in [DVec3::X, DVec3::Z, v(0.3, -1.0, 2.0)] {
                 assert!((n.apply(p) - q * p).length() < 1e-12);
@@ -632,14 +655,28 @@ mod tests {
         let (lo, hi) = OFFICE_BOUNDS_M;
         for t in &tris {
             for p in t.vertices {
-                assert!(p.cmpge(DVec3::from(lo) - 1e-12).all() && p.cmple(DVec3::from(hi) + 1e-12).all(), "{p}");
+                assert!(
+                    p.cmpge(DVec3::from(lo) - 1e-12).all() && p.cmple(DVec3::from(hi) + 1e-12).all(),
+                    "{p}"
+                );
             }
         }
         // The cabinet (turned a quarter) stands against the wall x = 3: x from 2.525 to 2.975.
         let cab: Vec<_> = tris.iter().filter(|t| t.material == CABINET).collect();
-        let xmax = cab.iter().flat_map(|t| t.vertices).map(|p| p.x).fold(f64::MIN, f64::max);
-        let zmin = cab.iter().flat_map(|t| t.vertices).map(|p| p.z).fold(f64::MAX, f64::min);
-        assert!((xmax - 2.975).abs() < 1e-12 && (zmin + 1.9).abs() < 1e-12, "{xmax} {zmin}");
+        let xmax = cab
+            .iter()
+            .flat_map(|t| t.vertices)
+            .map(|p| p.x)
+            .fold(f64::MIN, f64::max);
+        let zmin = cab
+            .iter()
+            .flat_map(|t| t.vertices)
+            .map(|p| p.z)
+            .fold(f64::MAX, f64::min);
+        assert!(
+            (xmax - 2.975).abs() < 1e-12 && (zmin + 1.9).abs() < 1e-12,
+            "{xmax} {zmin}"
+        );
         let big = office_with_statues();
         assert!(big.triangle_count() >= 250_000, "{}", big.triangle_count());
     }

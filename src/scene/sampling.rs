@@ -94,7 +94,14 @@ mod tests {
     fn pcg_matches_the_reference_sequence() {
         // pcg32-demo (pcg-c-basic) seeded with initstate 42, initseq 54: the first outputs.
         let mut g = Pcg32::new(42, 54);
-        let want = [0xa15c02b7u32, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e];
+        let want = [
+            0xa15c02b7u32,
+            0x7b47f409,
+            0xba1d3330,
+            0x83d2f293,
+            0xbfa4784b,
+            0xcbed606e,
+        ];
         for w in want {
             assert_eq!(g.next_u32(), w);
         }
@@ -110,7 +117,12 @@ mod tests {
     fn cosine_samples_have_the_cosine_moments() {
         // E[cos θ] = 2/3 and E[cos² θ] = 1/2 under density cos θ / π; unit length; upper side.
         let mut g = Pcg32::new(1, 2);
-        for n in [DVec3::Z, DVec3::NEG_Z, DVec3::new(0.6, -0.8, 0.0), DVec3::new(1.0, 2.0, -2.0) / 3.0] {
+        for n in [
+            DVec3::Z,
+            DVec3::NEG_Z,
+            DVec3::new(0.6, -0.8, 0.0),
+            DVec3::new(1.0, 2.0, -2.0) / 3.0,
+        ] {
             let (t, b) = basis(n);
             assert!(t.dot(n).abs() < 1e-12 && b.dot(n).abs() < 1e-12 && t.dot(b).abs() < 1e-12);
             assert!((t.cross(b) - n).length() < 1e-12, "right-handed");

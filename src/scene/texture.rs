@@ -88,7 +88,12 @@ impl Image {
     /// Errors: a message saying what is wrong (not a PNG, truncated, too large); the caller names
     /// the image.
     pub fn decode_png(bytes: &[u8]) -> Result<Self, String> {
-        let mut decoder = png::Decoder::new_with_limits(Cursor::new(bytes), png::Limits { bytes: MAX_DECODE_BYTES });
+        let mut decoder = png::Decoder::new_with_limits(
+            Cursor::new(bytes),
+            png::Limits {
+                bytes: MAX_DECODE_BYTES,
+            },
+        );
         decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
         let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG: {e}"))?;
         let (width, height) = reader.info().size();
@@ -140,7 +145,11 @@ impl Image {
     /// The linear RGB value (0…1 per channel) at texture coordinates (`u`, `v`) under `texture`'s
     /// wrapping and filter. Non-finite coordinates read the top-left texel.
     pub fn sample_linear(&self, u: f64, v: f64, texture: &TextureRef) -> [f64; 3] {
-        let (u, v) = if u.is_finite() && v.is_finite() { (u, v) } else { (0.0, 0.0) };
+        let (u, v) = if u.is_finite() && v.is_finite() {
+            (u, v)
+        } else {
+            (0.0, 0.0)
+        };
         let x = u * f64::from(self.width) - 0.5;
         let y = v * f64::from(self.height) - 0.5;
         match texture.filter {
@@ -252,7 +261,10 @@ mod tests {
         let lin = tex(Wrap::Repeat, Filter::Linear);
         assert_eq!(img.sample_linear(0.25, 0.5, &lin), [0.0; 3], "texel centre");
         assert_eq!(img.sample_linear(0.75, 0.5, &lin), [1.0; 3]);
-        assert!((img.sample_linear(0.5, 0.5, &lin)[0] - 0.5).abs() < 1e-12, "halfway, linear space");
+        assert!(
+            (img.sample_linear(0.5, 0.5, &lin)[0] - 0.5).abs() < 1e-12,
+            "halfway, linear space"
+        );
         // Repeat: u = 1.25 is u = 0.25; between the last and first texel at u = 0 (x = -0.5).
         assert_eq!(img.sample_linear(1.25, 0.5, &lin), [0.0; 3]);
         assert!((img.sample_linear(0.0, 0.5, &lin)[0] - 0.5).abs() < 1e-12);
