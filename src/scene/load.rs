@@ -461,6 +461,13 @@ impl Loader<'_> {
                 pos_acc.dimensions()
             )));
         }
+        if pos.count > 3 * MAX_TRIANGLES {
+            return Err(self.bad(format!(
+                "{what}: {} vertices; at most {} are supported",
+                pos.count,
+                3 * MAX_TRIANGLES
+            )));
+        }
         let mut positions: Vec<DVec3> =
             crate::files::try_vec(pos.count, "positions").map_err(|e| self.bad(format!("{what}: {e}")))?;
         for i in 0..pos.count {
