@@ -8,6 +8,8 @@
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles; the
 //!   CPU geometry it draws and culls with is `nearfield::select` (`lit_bound`, `view`).
+//! - [`scene`]: the scene lighting pass: a glTF scene lit by every far-field instance (direct
+//!   light, cube shadow maps in an atlas, tiled light lists), in cd/m².
 //! - [`shaders`]: the WGSL each pass compiles (generated constants, `shaders/common/`, the pass)
 //!   and the CPU tests (naga) that hold the shader contract.
 //! - [`slots`]: per-draw records at dynamic offsets.
@@ -20,6 +22,7 @@ pub mod frame;
 pub mod nearfield;
 pub mod renderer;
 pub mod residency;
+pub mod scene;
 pub mod shaders;
 pub mod slots;
 pub mod target;
@@ -120,6 +123,12 @@ pub enum Arg {
     Scan,
     /// A near-field pack's layout.
     Pack,
+    /// A scene to light.
+    Scene,
+    /// The scene pass's lux floor (lx).
+    LuxFloor,
+    /// The scene pass's largest shadow-map face (px).
+    FacePx,
 }
 
 impl Arg {
@@ -145,6 +154,9 @@ impl Arg {
             Arg::Proxy => "proxy",
             Arg::Scan => "scan",
             Arg::Pack => "pack",
+            Arg::Scene => "scene",
+            Arg::LuxFloor => "lux_floor_lx",
+            Arg::FacePx => "max_face_px",
         }
     }
 }

@@ -15,6 +15,7 @@ use super::context::{ContextDesc, GpuContext};
 use super::farfield::{FarfieldLuminaire, FarfieldPass};
 use super::frame::{self, FrameView, RenderOptions};
 use super::nearfield::{NearfieldLuminaire, NearfieldOptions, NearfieldPass, NearfieldSettings};
+use super::scene::{ScenePass, SceneSettings};
 use super::target::RenderTarget;
 use super::{Arg, GpuError};
 use crate::nearfield::pack::Pack;
@@ -61,6 +62,7 @@ pub struct Renderer {
     pub ctx: GpuContext,
     farfield: FarfieldPass,
     nearfield: NearfieldPass,
+    scene: ScenePass,
     luminaires: BTreeMap<LuminaireId, Luminaire>,
     instances: BTreeMap<InstanceId, Instance>,
     next_id: u64,
@@ -72,10 +74,12 @@ impl Renderer {
         let ctx = GpuContext::new(desc)?;
         let farfield = FarfieldPass::new(&ctx)?;
         let nearfield = NearfieldPass::new(&ctx)?;
+        let scene = ScenePass::new(&ctx)?;
         Ok(Renderer {
             ctx,
             farfield,
             nearfield,
+            scene,
             luminaires: BTreeMap::new(),
             instances: BTreeMap::new(),
             next_id: 1,
@@ -219,6 +223,22 @@ impl Renderer {
         Ok(cd * cos_i / r2)
     }
 
+    /// Loads a scene for the scene lighting pass (replacing any earlier one): from then on every
+    /// frame draws it lit by every far-field instance, before the luminaires' own appearance.
+    pub fn set_scene(&mut self, scene: &crate::scene::Scene) -> Result<(), GpuError> {
+        self.scene.set_scene(&self.ctx, scene)
+    }
+
+    /// Removes the scene.
+    pub fn clear_scene(&mut self) {
+        self.scene.clear_scene();
+    }
+
+    /// Sets how the scene is lit (lux floor, shadows, shadow budget).
+    pub fn set_scene_settings(&mut self, settings: SceneSettings) -> Result<(), GpuError> {
+        self.scene.set_settings(settings)
+    }
+
     /// Removes an instance.
     pub fn remove_instance(&mut self, id: InstanceId) -> Result<(), GpuError> {
         self.instances
@@ -245,9 +265,10 @@ impl Renderer {
                 None => {}
             }
         }
+        let scene = frame::prepare(&mut self.scene, &self.ctx, &view, &far)?;
         let far = frame::prepare(&mut self.farfield, &self.ctx, &view, &far)?;
         let near = frame::prepare(&mut self.nearfield, &self.ctx, &view, &near)?;
-        frame::render(&self.ctx, target, &view, &[&far, &near])
+        frame::render(&self.ctx, target, &view, &[&scene, &far, &near])
     }
 }
 

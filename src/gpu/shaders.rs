@@ -6,7 +6,9 @@
 //! 2. `shaders/common/common.wgsl`: code every pass shares (π, tone mapping, the direction towards
 //!    the eye, the colour + depth output);
 //! 3. the pass's own code: `shaders/farfield.wgsl`; the parts of `shaders/nearfield/` joined in the
-//!    order of `NEARFIELD` (`pass.wgsl` says what each part holds).
+//!    order of `NEARFIELD` (`pass.wgsl` says what each part holds); `shaders/scene/lighting.wgsl`
+//!    and `shaders/scene/shadow.wgsl`, after the scene pass's own generated constants (intensity
+//!    table size, the shadow maps' near plane and bias, the cube faces' axes: [`scene_constants`]).
 //!
 //! The unit tests below parse and validate every assembled shader with naga (the version wgpu
 //! uses), without a GPU, and check each GPU struct's size and member offsets and the near-field
@@ -39,6 +41,11 @@ pub(crate) const NEARFIELD: [&str; 6] = [
     include_str!("../../shaders/nearfield/fragment.wgsl"),
 ];
 
+/// The scene pass's lighting shader.
+pub(crate) const SCENE_LIGHTING: &str = include_str!("../../shaders/scene/lighting.wgsl");
+/// The scene pass's shadow-map shader.
+pub(crate) const SCENE_SHADOW: &str = include_str!("../../shaders/scene/shadow.wgsl");
+
 /// The constants generated from the Rust definitions (part 1).
 pub(crate) fn generated_constants() -> String {
     let mut s = format!(
@@ -58,6 +65,38 @@ pub(crate) fn generated_constants() -> String {
 /// The name of `mode`'s generated constant: `SELECTION_` and its name in capitals.
 fn selection_constant(mode: SelectionMode) -> String {
     format!("SELECTION_{}", mode.name().to_uppercase())
+}
+
+/// The scene pass's constants, generated from `gpu::scene`'s definitions.
+pub(crate) fn scene_constants() -> String {
+    use super::scene::lights::{INTENSITY_TABLE_H, INTENSITY_TABLE_W};
+    use super::scene::shadows::{CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M, SHADOW_RELATIVE_BIAS};
+    let faces = |name: &str, v: &[glam::Vec3; 6]| -> String {
+        let items: Vec<String> = v
+            .iter()
+            .map(|a| format!("vec3<f32>({:?}, {:?}, {:?})", a.x, a.y, a.z))
+            .collect();
+        format!("const {name}: array<vec3<f32>, 6> = array<vec3<f32>, 6>({});\n", items.join(", "))
+    };
+    format!(
+        "const INTENSITY_TABLE_W: u32 = {INTENSITY_TABLE_W}u;\n\
+         const INTENSITY_TABLE_H: u32 = {INTENSITY_TABLE_H}u;\n\
+         const SHADOW_NEAR_M: f32 = {SHADOW_NEAR_M:?};\n\
+         const SHADOW_RELATIVE_BIAS: f32 = {SHADOW_RELATIVE_BIAS:?};\n{}{}{}\n",
+        faces("CUBE_FORWARD", &CUBE_FORWARD),
+        faces("CUBE_RIGHT", &CUBE_RIGHT),
+        faces("CUBE_UP", &CUBE_UP)
+    )
+}
+
+/// The scene pass's lighting shader as compiled.
+pub fn scene() -> String {
+    [generated_constants(), scene_constants(), COMMON.to_string(), SCENE_LIGHTING.to_string()].concat()
+}
+
+/// The scene pass's shadow-map shader as compiled.
+pub fn scene_shadow() -> String {
+    [generated_constants(), scene_constants(), COMMON.to_string(), SCENE_SHADOW.to_string()].concat()
 }
 
 /// The far-field shader as compiled.
@@ -126,6 +165,8 @@ mod tests {
     fn every_shader_parses_and_validates() {
         module("farfield", &farfield());
         module("nearfield", &nearfield());
+        module("scene", &scene());
+        module("scene shadow", &scene_shadow());
     }
 
     #[test]
@@ -170,6 +211,81 @@ mod tests {
                 bvh
             }),
         );
+    }
+
+    #[test]
+    fn scene_structs_match_their_rust_twins() {
+        use super::super::scene::lights::LightRecord;
+        use super::super::scene::{SceneFrameUniform, ShadowFaceUniform};
+        let m = module("scene", &scene());
+        assert_same(
+            "scene",
+            "SceneFrame",
+            wgsl_layout(&m, "SceneFrame"),
+            "SceneFrameUniform",
+            rust_layout!(SceneFrameUniform {
+                clip_from_world,
+                eye,
+                params,
+                tiles,
+                atlas
+            }),
+        );
+        assert_same(
+            "scene",
+            "Light",
+            wgsl_layout(&m, "Light"),
+            "LightRecord",
+            rust_layout!(LightRecord {
+                centre,
+                local_x,
+                local_y,
+                local_z,
+                axis_a,
+                axis_b,
+                tables
+            }),
+        );
+        let s = module("scene shadow", &scene_shadow());
+        assert_same(
+            "scene shadow",
+            "ShadowFace",
+            wgsl_layout(&s, "ShadowFace"),
+            "ShadowFaceUniform",
+            rust_layout!(ShadowFaceUniform { clip_from_world }),
+        );
+    }
+
+    #[test]
+    fn scene_constants_equal_the_rust_definitions() {
+        use super::super::scene::shadows::{CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M};
+        let m = module("scene", &scene());
+        let constant = |name: &str| {
+            let (_, c) = m
+                .constants
+                .iter()
+                .find(|(_, c)| c.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("no constant {name}"));
+            c.init
+        };
+        let scalar = |h: naga::Handle<naga::Expression>| match m.global_expressions[h] {
+            naga::Expression::Literal(naga::Literal::F32(v)) => v,
+            ref e => panic!("{e:?}"),
+        };
+        assert_eq!(scalar(constant("SHADOW_NEAR_M")), SHADOW_NEAR_M);
+        for (name, want) in [("CUBE_FORWARD", CUBE_FORWARD), ("CUBE_RIGHT", CUBE_RIGHT), ("CUBE_UP", CUBE_UP)] {
+            let naga::Expression::Compose { ref components, .. } = m.global_expressions[constant(name)] else {
+                panic!("{name} is not an array");
+            };
+            assert_eq!(components.len(), 6, "{name}");
+            for (f, v) in components.iter().enumerate() {
+                let naga::Expression::Compose { components: ref xyz, .. } = m.global_expressions[*v] else {
+                    panic!("{name}[{f}]");
+                };
+                let got: Vec<f32> = xyz.iter().map(|h| scalar(*h)).collect();
+                assert_eq!(got, want[f].to_array().to_vec(), "{name}[{f}]");
+            }
+        }
     }
 
     #[test]

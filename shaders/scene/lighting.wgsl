@@ -1,0 +1,276 @@
+// Scene lighting pass, direct light (issue 20; docs/scene-lighting.md, "The GPU pass"): the scene's
+// triangles drawn from the host's camera, each fragment lit by every photometric luminaire whose
+// influence sphere reaches it (the fragment's screen tile lists them), with visibility from the
+// luminaires' cube shadow maps. Output: L = ρ·E/π per RGB channel (Lambertian; the luminance Y of
+// the colour is ρ_Y·E/π in cd/m²), or its Reinhard-tone-mapped display value; plus the R32F depth.
+//
+// Direct illuminance of one luminaire at x (normal n, turned towards the eye): its opening is cut
+// into na × nb stratified points s_k (the midpoints of the cells of its parameterisation, uniform
+// in area; one point, the photometric centre, when it has no area); each carries I(x − s_k)/N:
+//   E = Σ_k I(x − s_k)/N · max(0, n·(s_k − x)) / |s_k − x|³ · V_k.
+// V_k comes from the cube shadow map rendered from the photometric centre c (depth along the face
+// axis, reversed and infinite: depth = SHADOW_NEAR_M / distance along the axis), PCSS-like:
+//   1. blocker search: points b on each segment x → s_k (at 1/4, 1/2, 3/4) are looked up; a texel
+//      occludes when its surface lies nearer to c than the receiver plane (through x, normal n)
+//      along the texel centre's own ray (so the receiver's plane never shadows itself);
+//   2. with d_b the mean distance of the blockers found and d_r = |x − c|, the segment x → s_k is
+//      taken to cross the blockers at b_k = x + (s_k − x)(1 − d_b/d_r): V_k = 0 when b_k's texel
+//      occludes. For one planar blocker parallel to the receiver this is exact (similar triangles);
+//      a point source (s = c) gets the hard shadow of x's own texel.
+
+struct SceneFrame {
+    // World -> wgpu clip space (the host's view · projection with its depth range and origin).
+    clip_from_world: mat4x4<f32>,
+    // xyz = the eye (w = 1) or the direction towards it (w = 0, orthographic).
+    eye: vec4<f32>,
+    // x = exposure (m²/cd), y = mode (0 luminance, 1 tone mapped), z = lux floor, w = unused.
+    params: vec4<f32>,
+    // x = tile size (px), y = tiles across, z = tiles down, w = number of luminaires.
+    tiles: vec4<u32>,
+    // x = intensity tables per atlas row, y = shadow faces per atlas row, z = face size (px),
+    // w = 1 with shadows, 0 without.
+    atlas: vec4<u32>,
+};
+
+struct Light {
+    // xyz = photometric centre (world m), w = influence radius (m).
+    centre: vec4<f32>,
+    // Rows of the luminaire-from-world rotation (xyz; w unused).
+    local_x: vec4<f32>,
+    local_y: vec4<f32>,
+    local_z: vec4<f32>,
+    // Opening half-axes in world metres (xyz); w = stratified points along the axis.
+    axis_a: vec4<f32>,
+    axis_b: vec4<f32>,
+    // x = intensity table, y = first of its six shadow faces, z = 1 for an elliptic opening, w = unused.
+    tables: vec4<u32>,
+};
+
+@group(0) @binding(0) var<uniform> frame: SceneFrame;
+@group(0) @binding(1) var<storage, read> lights: array<Light>;
+// Per screen tile (row-major) a pair (first, count) into the indices after the pairs.
+@group(0) @binding(2) var<storage, read> tile_lists: array<u32>;
+// I(C, γ) in cd, one INTENSITY_TABLE_W × INTENSITY_TABLE_H table per photometry, node-aligned
+// (texel (i, j) at C = i·360/(W−1), γ = j·180/(H−1)).
+@group(0) @binding(3) var intensity_atlas: texture_2d<f32>;
+// Six faces per luminaire (CUBE_FORWARD order), face size frame.atlas.z.
+@group(0) @binding(4) var shadow_atlas: texture_depth_2d;
+
+struct VsIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) reflectance: vec3<f32>,
+};
+
+struct VsOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) reflectance: vec3<f32>,
+};
+
+@vertex
+fn vs_scene(v: VsIn) -> VsOut {
+    var out: VsOut;
+    out.clip = frame.clip_from_world * vec4<f32>(v.position, 1.0);
+    out.world = v.position;
+    out.normal = v.normal;
+    out.reflectance = v.reflectance;
+    return out;
+}
+
+// Intensity (cd) of table `table` towards the direction d of the luminaire frame, bilinear between
+// the table's nodes, wrapping in C.
+fn intensity_cd(table: u32, d: vec3<f32>) -> f32 {
+    let w = i32(INTENSITY_TABLE_W);
+    let h = i32(INTENSITY_TABLE_H);
+    let per_row = frame.atlas.x;
+    let origin = vec2<i32>(i32(table % per_row) * w, i32(table / per_row) * h);
+    let gamma = atan2(length(d.xy), -d.z);
+    var c = atan2(d.y, d.x);
+    if (c < 0.0) {
+        c = c + 2.0 * PI;
+    }
+    let u = c / (2.0 * PI) * f32(w - 1);
+    let v = gamma / PI * f32(h - 1);
+    let i0 = clamp(i32(floor(u)), 0, w - 1);
+    let j0 = clamp(i32(floor(v)), 0, h - 1);
+    let i1 = min(i0 + 1, w - 1);
+    let j1 = min(j0 + 1, h - 1);
+    let fu = clamp(u - f32(i0), 0.0, 1.0);
+    let fv = clamp(v - f32(j0), 0.0, 1.0);
+    let a = textureLoad(intensity_atlas, origin + vec2<i32>(i0, j0), 0).r;
+    let b = textureLoad(intensity_atlas, origin + vec2<i32>(i1, j0), 0).r;
+    let e = textureLoad(intensity_atlas, origin + vec2<i32>(i0, j1), 0).r;
+    let f = textureLoad(intensity_atlas, origin + vec2<i32>(i1, j1), 0).r;
+    return mix(mix(a, b, fu), mix(e, f, fu), fv);
+}
+
+// The cube face a direction falls on (CUBE_FORWARD order: +X, −X, +Y, −Y, +Z, −Z).
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(1u, 0u, d.x >= 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(3u, 2u, d.y >= 0.0);
+    }
+    return select(5u, 4u, d.z >= 0.0);
+}
+
+// The distance from the light's centre of the surface its shadow map holds in the direction d
+// (from the centre) when that surface lies nearer than the receiver plane through x with normal n
+// along the same texel's ray; −1 otherwise (nothing nearer, or nothing drawn there).
+fn occluder_m(light: Light, d: vec3<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let face = cube_face(d);
+    let forward = CUBE_FORWARD[face];
+    let right = CUBE_RIGHT[face];
+    let up = CUBE_UP[face];
+    let fd = dot(forward, d);
+    let size = i32(frame.atlas.z);
+    let s = f32(size);
+    let ndc = vec2<f32>(dot(right, d), dot(up, d)) / fd;
+    let px = clamp(i32(floor((ndc.x * 0.5 + 0.5) * s)), 0, size - 1);
+    let py = clamp(i32(floor((0.5 - ndc.y * 0.5) * s)), 0, size - 1);
+    let tile = light.tables.y + face;
+    let per_row = frame.atlas.y;
+    let origin = vec2<i32>(i32(tile % per_row) * size, i32(tile / per_row) * size);
+    let depth = textureLoad(shadow_atlas, origin + vec2<i32>(px, py), 0);
+    if (depth <= 0.0) {
+        return -1.0;
+    }
+    let along_m = SHADOW_NEAR_M / depth;
+    // The texel centre's ray, with a unit component along the face's axis.
+    let cx = (f32(px) + 0.5) / s * 2.0 - 1.0;
+    let cy = 1.0 - (f32(py) + 0.5) / s * 2.0;
+    let ray = forward + cx * right + cy * up;
+    let denom = dot(n, ray);
+    if (denom >= 0.0) {
+        return -1.0;
+    }
+    let plane_m = dot(n, x - light.centre.xyz) / denom;
+    if (along_m < plane_m * (1.0 - SHADOW_RELATIVE_BIAS)) {
+        return along_m * length(ray);
+    }
+    return -1.0;
+}
+
+// The k-th stratified point of the opening (world), k < na·nb.
+fn opening_point(light: Light, k: u32) -> vec3<f32> {
+    let na = u32(light.axis_a.w);
+    let nb = u32(light.axis_b.w);
+    var s = (f32(k % na) + 0.5) / f32(na) * 2.0 - 1.0;
+    var t = (f32(k / na) + 0.5) / f32(nb) * 2.0 - 1.0;
+    if (light.tables.z == 1u && (s != 0.0 || t != 0.0)) {
+        // Shirley–Chiu concentric map from the square to the disc (area-preserving).
+        let q = PI / 4.0;
+        var r: f32;
+        var phi: f32;
+        if (abs(s) > abs(t)) {
+            r = s;
+            phi = q * (t / s);
+        } else {
+            r = t;
+            phi = 2.0 * q - q * (s / t);
+        }
+        s = r * cos(phi);
+        t = r * sin(phi);
+    }
+    return light.centre.xyz + s * light.axis_a.xyz + t * light.axis_b.xyz;
+}
+
+// Direct illuminance (lx) at x (normal n facing the side lit) from one luminaire.
+fn light_lx(light: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let c = light.centre.xyz;
+    let d_r = length(x - c);
+    if (d_r > light.centre.w || d_r <= 0.0) {
+        return 0.0;
+    }
+    let count = u32(light.axis_a.w) * u32(light.axis_b.w);
+    let shadows = frame.atlas.w == 1u;
+    // 1. Blocker search.
+    var blockers = 0.0;
+    var blocker_sum_m = 0.0;
+    if (shadows) {
+        for (var k = 0u; k < count; k = k + 1u) {
+            let s = opening_point(light, k);
+            for (var j = 1u; j < 4u; j = j + 1u) {
+                let b = x + (s - x) * (f32(j) * 0.25);
+                let o = occluder_m(light, b - c, x, n);
+                if (o > 0.0) {
+                    blockers = blockers + 1.0;
+                    blocker_sum_m = blocker_sum_m + o;
+                }
+            }
+        }
+    }
+    let lambda = clamp(1.0 - blocker_sum_m / max(blockers, 1.0) / d_r, 0.0, 1.0);
+    // 2. Each point's intensity, incidence, distance and visibility.
+    var e = 0.0;
+    for (var k = 0u; k < count; k = k + 1u) {
+        let s = opening_point(light, k);
+        let to_s = s - x;
+        let r2 = dot(to_s, to_s);
+        let cos_i = dot(n, to_s) * inverseSqrt(r2);
+        if (cos_i <= 0.0) {
+            continue;
+        }
+        if (blockers > 0.0) {
+            let b = x + to_s * lambda;
+            if (occluder_m(light, b - c, x, n) > 0.0) {
+                continue;
+            }
+        }
+        let d = -to_s;
+        let local = vec3<f32>(dot(light.local_x.xyz, d), dot(light.local_y.xyz, d), dot(light.local_z.xyz, d));
+        e = e + intensity_cd(light.tables.x, local) * cos_i / r2;
+    }
+    return e / f32(count);
+}
+
+// Direct illuminance (lx) at x with normal n from every luminaire listed for the screen tile of
+// the fragment at `frag` (framebuffer pixels).
+fn direct_lx(frag: vec2<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let tile_px = f32(frame.tiles.x);
+    let tx = min(u32(frag.x / tile_px), frame.tiles.y - 1u);
+    let ty = min(u32(frag.y / tile_px), frame.tiles.z - 1u);
+    let tile = ty * frame.tiles.y + tx;
+    let first = tile_lists[2u * tile];
+    let count = tile_lists[2u * tile + 1u];
+    var e = 0.0;
+    for (var i = 0u; i < count; i = i + 1u) {
+        e = e + light_lx(lights[tile_lists[first + i]], x, n);
+    }
+    return e;
+}
+
+fn scene_color(in: VsOut) -> vec4<f32> {
+    var to_eye = frame.eye.xyz;
+    if (frame.eye.w > 0.5) {
+        to_eye = frame.eye.xyz - in.world;
+    }
+    // Two-sided: the side seen is the side lit.
+    var n = normalize(in.normal);
+    if (dot(n, to_eye) < 0.0) {
+        n = -n;
+    }
+    let e = direct_lx(in.clip.xy, in.world, n);
+    let l = in.reflectance * (e / PI);
+    if (frame.params.y > 0.5) {
+        let exposure = frame.params.x;
+        return vec4<f32>(reinhard(l.r, exposure), reinhard(l.g, exposure), reinhard(l.b, exposure), 1.0);
+    }
+    return vec4<f32>(l, 1.0);
+}
+
+// Entry points with the R32F depth output (targets with LUMI_DEPTH_R32F) ...
+@fragment
+fn fs_scene(in: VsOut) -> FsOut {
+    return FsOut(scene_color(in), vec4<f32>(in.clip.z, 0.0, 0.0, 1.0));
+}
+
+// ... and without it.
+@fragment
+fn fs_scene_color_only(in: VsOut) -> @location(0) vec4<f32> {
+    return scene_color(in);
+}

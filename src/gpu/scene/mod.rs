@@ -1,0 +1,781 @@
+//! The scene lighting pass (issue 20, first GPU step): a loaded [`Scene`] drawn from the host's
+//! camera and lit by every far-field luminaire instance of the renderer with direct light:
+//! absolute candela from each photometric web, inverse square, cos i, and visibility from cube
+//! shadow maps with penumbrae sized by the luminous opening. It writes L = ρ·E/π (cd/m²,
+//! Lambertian) and depth into the frame's target, before the far-field and near-field passes, so
+//! the luminaires' own appearance composites over the lit room through the one depth test.
+//!
+//! Promises:
+//! - [`ScenePass::set_scene`] uploads the scene once: world-space triangles, their geometric
+//!   normals (surfaces are two-sided: the side the eye sees is the side lit, as the reference's
+//!   calculation points take the normal of the receiving side) and their linear RGB reflectance,
+//!   per vertex from the material's base colour factor; a base-colour texture is replaced by its
+//!   mean (this step's one simplification of the reflectance; ρ_Y of untextured surfaces is
+//!   exactly the reference's).
+//! - Each frame lights with every far-field instance ([`Pass::prepare`]'s instances); near-field
+//!   scans do not light the scene yet. Direct illuminance is the reference's direct estimator
+//!   (`scene::reference`) with fixed stratified points on the opening instead of random ones and
+//!   shadow-map visibility instead of shadow rays: shaders/scene/lighting.wgsl says how.
+//! - Shadow maps ([`shadows`]) are rendered inside `prepare`, in their own render pass submitted
+//!   before the frame's (queue order makes them visible to it), and kept while the scene, the
+//!   layout and every luminaire's centre stay the same.
+//! - Light culling: each luminaire has an influence radius where its light falls below
+//!   [`SceneSettings::lux_floor_lx`]; each 16-pixel screen tile lists the luminaires whose
+//!   influence sphere covers it ([`lights`]), and fragments loop over their tile's list only.
+//! - Memory: the vertex buffer (36 bytes a vertex, three per triangle) must fit the device's
+//!   largest buffer; the shadow atlas stays within [`SceneSettings::shadow_budget_bytes`]; the
+//!   intensity atlas holds up to [`lights::MAX_INTENSITY_TABLES`] photometries (1 MiB each); the
+//!   tile lists and luminaire records are storage buffers far below lavapipe's 128 MiB a binding.
+
+pub mod lights;
+pub mod shadows;
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use glam::{Mat4, Vec3};
+
+use super::context::GpuContext;
+use super::farfield::FarfieldLuminaire;
+use super::frame::{FrameView, Pass};
+use super::slots::{DrawSlots, SLOT};
+use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat};
+use super::{Arg, GpuError};
+use crate::scene::Scene;
+use lights::{LightRecord, PlacedLight, INTENSITY_TABLE_H, INTENSITY_TABLE_W, MAX_INTENSITY_TABLES, MAX_TABLES_PER_ROW};
+use shadows::{face_clip_from_world, ShadowLayout, MIN_FACE_PX};
+
+/// How the scene pass lights.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneSettings {
+    /// The illuminance below which a luminaire's light is left out (its influence radius is where
+    /// I_max / r² falls to it), lx.
+    pub lux_floor_lx: f32,
+    /// Visibility from shadow maps (false: every luminaire reaches every point facing it).
+    pub shadows: bool,
+    /// Most bytes of the shadow atlas (4 a texel).
+    pub shadow_budget_bytes: u64,
+    /// Largest cube face, pixels (faces shrink by powers of two to fit the budget).
+    pub max_face_px: u32,
+}
+
+impl Default for SceneSettings {
+    fn default() -> Self {
+        SceneSettings {
+            lux_floor_lx: 0.1,
+            shadows: true,
+            shadow_budget_bytes: 64 << 20,
+            max_face_px: 512,
+        }
+    }
+}
+
+impl SceneSettings {
+    /// Checks the settings.
+    ///
+    /// Errors: `InvalidArgument` naming `lux_floor_lx` (finite, > 0), `budget_bytes` (> 0) or
+    /// `max_face_px` (≥ 16).
+    pub fn validate(&self) -> Result<(), GpuError> {
+        if !self.lux_floor_lx.is_finite() || self.lux_floor_lx <= 0.0 {
+            return Err(GpuError::invalid(
+                Arg::LuxFloor,
+                format!("{} must be finite and > 0", self.lux_floor_lx),
+            ));
+        }
+        if self.shadow_budget_bytes == 0 {
+            return Err(GpuError::invalid(Arg::BudgetBytes, "the shadow budget must be > 0"));
+        }
+        if self.max_face_px < MIN_FACE_PX {
+            return Err(GpuError::invalid(
+                Arg::FacePx,
+                format!("{} must be at least {MIN_FACE_PX}", self.max_face_px),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Uniform block of a frame (`SceneFrame` in shaders/scene/lighting.wgsl; `gpu::shaders` tests the
+/// two layouts are one).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct SceneFrameUniform {
+    /// World → wgpu clip space.
+    pub clip_from_world: [[f32; 4]; 4],
+    /// The eye (w = 1) or the direction towards it (w = 0).
+    pub eye: [f32; 4],
+    /// Exposure, mode, lux floor, unused.
+    pub params: [f32; 4],
+    /// Tile size, tiles across, tiles down, luminaires.
+    pub tiles: [u32; 4],
+    /// Intensity tables per row, shadow faces per row, face size, shadows on.
+    pub atlas: [u32; 4],
+}
+
+/// Uniform block of one shadow face (`ShadowFace` in shaders/scene/shadow.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct ShadowFaceUniform {
+    /// World → wgpu clip space of the face.
+    pub clip_from_world: [[f32; 4]; 4],
+}
+
+/// Floats per vertex: position, normal, linear RGB reflectance.
+const VERTEX_FLOATS: usize = 9;
+
+const SCENE_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
+    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+const SCENE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: (VERTEX_FLOATS * 4) as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &SCENE_ATTRIBUTES,
+};
+const SHADOW_ATTRIBUTES: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
+const SHADOW_VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: (VERTEX_FLOATS * 4) as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &SHADOW_ATTRIBUTES,
+};
+
+/// The vertices of a scene as the pass draws them (see the module's promises).
+pub fn scene_vertices(scene: &Scene) -> Vec<f32> {
+    let mean: Vec<[f32; 3]> = scene
+        .materials()
+        .iter()
+        .map(|m| {
+            let t = m.base_color_texture.as_ref().and_then(|t| {
+                let img = scene.images().get(t.image)?;
+                let (w, h) = (img.width(), img.height());
+                let mut sum = [0.0f64; 3];
+                for j in 0..h {
+                    for i in 0..w {
+                        let u = (f64::from(i) + 0.5) / f64::from(w);
+                        let v = (f64::from(j) + 0.5) / f64::from(h);
+                        let s = img.sample_linear(u, v, t);
+                        (0..3).for_each(|k| sum[k] += s[k]);
+                    }
+                }
+                let n = f64::from(w) * f64::from(h);
+                Some(sum.map(|s| s / n.max(1.0)))
+            });
+            let t = t.unwrap_or([1.0; 3]);
+            std::array::from_fn(|k| (m.base_color_factor[k] * t[k]) as f32)
+        })
+        .collect();
+    let mut out = Vec::with_capacity(scene.triangles().len() * 3 * VERTEX_FLOATS);
+    for (tri, m) in scene.triangles().iter().zip(scene.material_of()) {
+        let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero().as_vec3();
+        let rho = mean.get(*m as usize).copied().unwrap_or([1.0; 3]);
+        for v in tri {
+            let p = v.as_vec3();
+            out.extend_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, rho[0], rho[1], rho[2]]);
+        }
+    }
+    out
+}
+
+/// A scene on the GPU.
+#[derive(Debug)]
+struct SceneMesh {
+    vertices: wgpu::Buffer,
+    count: u32,
+    generation: u64,
+}
+
+/// The intensity tables of the photometries of the last frame.
+#[derive(Debug)]
+struct IntensityAtlas {
+    photometries: Vec<usize>,
+    view: wgpu::TextureView,
+    per_row: u32,
+    max_cd: Vec<f32>,
+}
+
+/// The shadow maps of the last frame and what they were rendered for.
+#[derive(Debug)]
+struct ShadowCache {
+    key: (u64, ShadowLayout, Vec<[u32; 3]>),
+    view: wgpu::TextureView,
+}
+
+/// What a scene pipeline is specialised for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct PipelineKey {
+    color: ColorFormat,
+    depth_copy: bool,
+    reversed_z: bool,
+}
+
+/// Pipelines, layouts and the uploaded scene of the scene lighting pass.
+#[derive(Debug)]
+pub struct ScenePass {
+    module: wgpu::ShaderModule,
+    frame_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    face_layout: wgpu::BindGroupLayout,
+    shadow_pipeline: wgpu::RenderPipeline,
+    faces: DrawSlots,
+    mesh: Option<SceneMesh>,
+    settings: SceneSettings,
+    tables: Option<IntensityAtlas>,
+    shadows: Option<ShadowCache>,
+    placeholder_depth: wgpu::TextureView,
+    placeholder_table: wgpu::TextureView,
+    generations: u64,
+}
+
+fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureFormat) -> wgpu::Texture {
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_DST
+            | if format == wgpu::TextureFormat::Depth32Float {
+                wgpu::TextureUsages::RENDER_ATTACHMENT
+            } else {
+                wgpu::TextureUsages::empty()
+            },
+        view_formats: &[],
+    })
+}
+
+fn storage_buffer(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: (bytes.len() as u64).max(16).next_multiple_of(4),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::UNIFORM,
+        mapped_at_creation: false,
+    });
+    if !bytes.is_empty() {
+        ctx.queue.write_buffer(&buf, 0, bytes);
+    }
+    buf
+}
+
+impl ScenePass {
+    /// Compiles the shaders and creates the layouts; no scene yet.
+    pub fn new(ctx: &GpuContext) -> Result<Self, GpuError> {
+        ctx.scoped("creating the scene pass", || {
+            let module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("scene/lighting.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::scene().into()),
+            });
+            let shadow_module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("scene/shadow.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::scene_shadow().into()),
+            });
+            let frame_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("scene frame"),
+                entries: &[
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 0,
+                        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                        ty: wgpu::BindingType::Buffer {
+                            ty: wgpu::BufferBindingType::Uniform,
+                            has_dynamic_offset: false,
+                            min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<SceneFrameUniform>() as u64),
+                        },
+                        count: None,
+                    },
+                    storage_entry(1),
+                    storage_entry(2),
+                    texture_entry(3, wgpu::TextureSampleType::Float { filterable: false }),
+                    texture_entry(4, wgpu::TextureSampleType::Depth),
+                ],
+            });
+            let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("scene"),
+                bind_group_layouts: &[Some(&frame_layout)],
+                immediate_size: 0,
+            });
+            let face_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shadow face"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<ShadowFaceUniform>() as u64),
+                    },
+                    count: None,
+                }],
+            });
+            let shadow_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("scene shadows"),
+                bind_group_layouts: &[Some(&face_layout)],
+                immediate_size: 0,
+            });
+            let shadow_pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("scene shadow faces"),
+                layout: Some(&shadow_layout),
+                vertex: wgpu::VertexState {
+                    module: &shadow_module,
+                    entry_point: Some("vs_shadow"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(SHADOW_VERTEX_LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Greater),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            });
+            let placeholder_depth = texture(ctx, "no shadow maps", 1, 1, wgpu::TextureFormat::Depth32Float)
+                .create_view(&wgpu::TextureViewDescriptor::default());
+            let placeholder_table = texture(ctx, "no intensity tables", 1, 1, wgpu::TextureFormat::R32Float)
+                .create_view(&wgpu::TextureViewDescriptor::default());
+            Ok(ScenePass {
+                module,
+                frame_layout,
+                pipeline_layout,
+                pipelines: HashMap::new(),
+                face_layout,
+                shadow_pipeline,
+                faces: DrawSlots::new("shadow faces", wgpu::BufferUsages::UNIFORM),
+                mesh: None,
+                settings: SceneSettings::default(),
+                tables: None,
+                shadows: None,
+                placeholder_depth,
+                placeholder_table,
+                generations: 0,
+            })
+        })
+    }
+
+    /// Uploads `scene` (replacing any earlier one).
+    ///
+    /// Errors: `InvalidArgument` (`Arg::Scene`) for a scene with no triangles or one whose vertices
+    /// do not fit the device's largest buffer; what creating the buffer reports.
+    pub fn set_scene(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), GpuError> {
+        let bytes = scene.triangles().len() as u64 * 3 * (VERTEX_FLOATS as u64) * 4;
+        if bytes == 0 {
+            return Err(GpuError::invalid(Arg::Scene, "the scene has no triangles"));
+        }
+        let max = ctx.device.limits().max_buffer_size;
+        if bytes > max {
+            return Err(GpuError::invalid(
+                Arg::Scene,
+                format!(
+                    "{} triangles need {bytes} bytes of vertices; the device's largest buffer is {max} bytes",
+                    scene.triangles().len()
+                ),
+            ));
+        }
+        let vertices = scene_vertices(scene);
+        let buf = ctx.scoped("uploading a scene", || {
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("scene vertices"),
+                size: bytes,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(&vertices));
+            Ok(buf)
+        })?;
+        self.generations += 1;
+        self.mesh = Some(SceneMesh {
+            vertices: buf,
+            count: (vertices.len() / VERTEX_FLOATS) as u32,
+            generation: self.generations,
+        });
+        self.shadows = None;
+        Ok(())
+    }
+
+    /// Removes the scene: frames draw no room.
+    pub fn clear_scene(&mut self) {
+        self.mesh = None;
+        self.shadows = None;
+    }
+
+    /// Whether a scene is loaded.
+    pub fn has_scene(&self) -> bool {
+        self.mesh.is_some()
+    }
+
+    /// The lighting settings.
+    pub fn settings(&self) -> SceneSettings {
+        self.settings
+    }
+
+    /// Sets the lighting settings (checked by [`SceneSettings::validate`]).
+    pub fn set_settings(&mut self, settings: SceneSettings) -> Result<(), GpuError> {
+        settings.validate()?;
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// The intensity atlas for the photometries of `instances` (rebuilt when they change) and each
+    /// instance's table index.
+    fn intensity_tables(
+        &mut self,
+        ctx: &GpuContext,
+        instances: &[(Arc<FarfieldLuminaire>, Mat4)],
+    ) -> Result<Vec<u32>, GpuError> {
+        let mut distinct: Vec<usize> = Vec::new();
+        let mut index = Vec::with_capacity(instances.len());
+        for (lum, _) in instances {
+            let key = Arc::as_ptr(&lum.photometry) as usize;
+            let i = distinct.iter().position(|k| *k == key).unwrap_or_else(|| {
+                distinct.push(key);
+                distinct.len() - 1
+            });
+            index.push(i as u32);
+        }
+        if distinct.len() > MAX_INTENSITY_TABLES {
+            return Err(GpuError::invalid(
+                Arg::Luminaire,
+                format!(
+                    "the scene is lit by {} distinct photometries; the intensity atlas holds {MAX_INTENSITY_TABLES}",
+                    distinct.len()
+                ),
+            ));
+        }
+        if self.tables.as_ref().is_some_and(|t| t.photometries == distinct) {
+            return Ok(index);
+        }
+        let per_row = (distinct.len() as u32).clamp(1, MAX_TABLES_PER_ROW);
+        let rows = (distinct.len() as u32).div_ceil(per_row).max(1);
+        let (w, h) = (per_row * INTENSITY_TABLE_W, rows * INTENSITY_TABLE_H);
+        let mut max_cd = vec![0.0f32; distinct.len()];
+        let view = ctx.scoped("uploading intensity tables", || {
+            let tex = texture(ctx, "intensity tables (cd)", w, h, wgpu::TextureFormat::R32Float);
+            for (t, key) in distinct.iter().enumerate() {
+                let Some((lum, _)) = instances
+                    .iter()
+                    .find(|(l, _)| Arc::as_ptr(&l.photometry) as usize == *key)
+                else {
+                    continue;
+                };
+                let table = lights::intensity_table(&lum.photometry);
+                max_cd[t] = table.iter().copied().fold(0.0, f32::max);
+                let (col, row) = (t as u32 % per_row, t as u32 / per_row);
+                ctx.queue.write_texture(
+                    wgpu::TexelCopyTextureInfo {
+                        texture: &tex,
+                        mip_level: 0,
+                        origin: wgpu::Origin3d {
+                            x: col * INTENSITY_TABLE_W,
+                            y: row * INTENSITY_TABLE_H,
+                            z: 0,
+                        },
+                        aspect: wgpu::TextureAspect::All,
+                    },
+                    bytemuck::cast_slice(&table),
+                    wgpu::TexelCopyBufferLayout {
+                        offset: 0,
+                        bytes_per_row: Some(INTENSITY_TABLE_W * 4),
+                        rows_per_image: None,
+                    },
+                    wgpu::Extent3d {
+                        width: INTENSITY_TABLE_W,
+                        height: INTENSITY_TABLE_H,
+                        depth_or_array_layers: 1,
+                    },
+                );
+            }
+            Ok(tex.create_view(&wgpu::TextureViewDescriptor::default()))
+        })?;
+        self.tables = Some(IntensityAtlas {
+            photometries: distinct,
+            view,
+            per_row,
+            max_cd,
+        });
+        Ok(index)
+    }
+
+    /// Renders the shadow maps of `records` unless the cached ones were made for the same scene,
+    /// layout and centres.
+    fn shadow_maps(&mut self, ctx: &GpuContext, records: &[LightRecord], layout: ShadowLayout) -> Result<(), GpuError> {
+        let Some(mesh) = &self.mesh else {
+            return Ok(());
+        };
+        let centres: Vec<[u32; 3]> = records
+            .iter()
+            .map(|r| [r.centre[0].to_bits(), r.centre[1].to_bits(), r.centre[2].to_bits()])
+            .collect();
+        let key = (mesh.generation, layout, centres);
+        if self.shadows.as_ref().is_some_and(|s| s.key == key) {
+            return Ok(());
+        }
+        let mut faces = Vec::with_capacity(records.len() * 6);
+        for r in records {
+            let c = Vec3::new(r.centre[0], r.centre[1], r.centre[2]);
+            for f in 0..6 {
+                faces.push(ShadowFaceUniform {
+                    clip_from_world: face_clip_from_world(c, f).to_cols_array_2d(),
+                });
+            }
+        }
+        let view = ctx.scoped("rendering shadow maps", || {
+            let tex = texture(ctx, "shadow atlas", layout.width, layout.height, wgpu::TextureFormat::Depth32Float);
+            let view = tex.create_view(&wgpu::TextureViewDescriptor::default());
+            let bind = self.faces.write(ctx, &self.face_layout, &faces).clone();
+            let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene shadow maps"),
+            });
+            {
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("scene shadow maps"),
+                    color_attachments: &[],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(0.0),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.shadow_pipeline);
+                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                for light in 0..records.len() {
+                    for f in 0..6 {
+                        let (x, y) = layout.face_origin(light, f);
+                        let s = layout.face_px;
+                        pass.set_viewport(x as f32, y as f32, s as f32, s as f32, 0.0, 1.0);
+                        pass.set_scissor_rect(x, y, s, s);
+                        pass.set_bind_group(0, &bind, &[((6 * light + f) as u64 * SLOT) as u32]);
+                        pass.draw(0..mesh.count, 0..1);
+                    }
+                }
+            }
+            ctx.queue.submit([enc.finish()]);
+            Ok(view)
+        })?;
+        self.shadows = Some(ShadowCache { key, view });
+        Ok(())
+    }
+
+    fn pipeline(&mut self, ctx: &GpuContext, key: PipelineKey) -> Result<wgpu::RenderPipeline, GpuError> {
+        if let Some(p) = self.pipelines.get(&key) {
+            return Ok(p.clone());
+        }
+        let p = ctx.scoped("creating a scene pipeline", || {
+            let targets = &frame_color_targets(key.color, key.depth_copy);
+            Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("scene lighting"),
+                layout: Some(&self.pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &self.module,
+                    entry_point: Some("vs_scene"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(SCENE_LAYOUT)],
+                },
+                primitive: wgpu::PrimitiveState {
+                    cull_mode: None,
+                    ..Default::default()
+                },
+                depth_stencil: Some(frame_depth_state(key.reversed_z)),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &self.module,
+                    entry_point: Some(if key.depth_copy {
+                        "fs_scene"
+                    } else {
+                        "fs_scene_color_only"
+                    }),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            }))
+        })?;
+        self.pipelines.insert(key, p.clone());
+        Ok(p)
+    }
+}
+
+impl Pass for ScenePass {
+    /// A far-field luminaire lighting the scene and its model matrix (luminaire frame → world).
+    type Instance = (Arc<FarfieldLuminaire>, Mat4);
+    type Prepared = SceneFrame;
+
+    /// Prepares a frame: intensity tables, luminaire records, shadow maps (rendered and submitted
+    /// here when they changed), tile lists for the view, the frame's bindings.
+    fn prepare(
+        &mut self,
+        ctx: &GpuContext,
+        view: &FrameView,
+        instances: &[Self::Instance],
+    ) -> Result<SceneFrame, GpuError> {
+        if self.mesh.is_none() {
+            return Ok(SceneFrame::default());
+        }
+        let settings = self.settings;
+        let table_of = self.intensity_tables(ctx, instances)?;
+        let (per_row, max_cd) = match &self.tables {
+            Some(t) => (t.per_row, t.max_cd.clone()),
+            None => (1, Vec::new()),
+        };
+        let records: Vec<LightRecord> = instances
+            .iter()
+            .zip(&table_of)
+            .enumerate()
+            .map(|(i, ((lum, model), t))| {
+                let placed = PlacedLight {
+                    photometry: &lum.photometry,
+                    model: *model,
+                    table: *t,
+                    max_cd: max_cd.get(*t as usize).copied().unwrap_or(0.0),
+                };
+                lights::light_record(&placed, i, settings.lux_floor_lx)
+            })
+            .collect();
+        let shadows_on = settings.shadows && !records.is_empty();
+        let layout = if shadows_on {
+            let max_side = ctx.device.limits().max_texture_dimension_2d;
+            let layout = ShadowLayout::new(records.len(), settings.shadow_budget_bytes, settings.max_face_px, max_side)?;
+            self.shadow_maps(ctx, &records, layout)?;
+            Some(layout)
+        } else {
+            None
+        };
+        let target = view.target();
+        let clip_from_world = view.clip_from_world();
+        let (tiles_x, tiles_y, lists) = lights::tile_lists(clip_from_world, target.width, target.height, &records);
+        let options = view.options();
+        let uniform = SceneFrameUniform {
+            clip_from_world: clip_from_world.to_cols_array_2d(),
+            eye: view.camera().eye_in(Mat4::IDENTITY).to_array(),
+            params: [options.exposure, view.output_flag(), settings.lux_floor_lx, 0.0],
+            tiles: [lights::TILE_PX, tiles_x, tiles_y, records.len() as u32],
+            atlas: [
+                per_row,
+                layout.map_or(1, |l| l.per_row),
+                layout.map_or(1, |l| l.face_px),
+                u32::from(layout.is_some()),
+            ],
+        };
+        let key = PipelineKey {
+            color: target.color,
+            depth_copy: target.depth == DepthFormat::R32Float,
+            reversed_z: view.camera().reversed_z,
+        };
+        let pipeline = self.pipeline(ctx, key)?;
+        let bind = ctx.scoped("binding a scene frame", || {
+            let frame_buf = storage_buffer(ctx, "scene frame", bytemuck::bytes_of(&uniform));
+            let lights_buf = storage_buffer(ctx, "scene luminaires", bytemuck::cast_slice(&records));
+            let lists_buf = storage_buffer(ctx, "scene tile lists", bytemuck::cast_slice(&lists));
+            let tables = self.tables.as_ref().map_or(&self.placeholder_table, |t| &t.view);
+            let shadow = match (&self.shadows, layout) {
+                (Some(s), Some(_)) => &s.view,
+                _ => &self.placeholder_depth,
+            };
+            Ok(ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("scene frame"),
+                layout: &self.frame_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: frame_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: lights_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: lists_buf.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: wgpu::BindingResource::TextureView(tables),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: wgpu::BindingResource::TextureView(shadow),
+                    },
+                ],
+            }))
+        })?;
+        let Some(mesh) = &self.mesh else {
+            return Ok(SceneFrame::default());
+        };
+        Ok(SceneFrame {
+            draw: Some(SceneDraw {
+                pipeline,
+                bind,
+                vertices: mesh.vertices.clone(),
+                count: mesh.count,
+            }),
+        })
+    }
+
+    fn record(&self, frame: &SceneFrame, pass: &mut wgpu::RenderPass<'_>) {
+        let Some(d) = &frame.draw else {
+            return;
+        };
+        pass.set_pipeline(&d.pipeline);
+        pass.set_bind_group(0, &d.bind, &[]);
+        pass.set_vertex_buffer(0, d.vertices.slice(..));
+        pass.draw(0..d.count, 0..1);
+    }
+}
+
+/// The scene's one draw of a frame.
+#[derive(Debug)]
+struct SceneDraw {
+    pipeline: wgpu::RenderPipeline,
+    bind: wgpu::BindGroup,
+    vertices: wgpu::Buffer,
+    count: u32,
+}
+
+/// One prepared frame of the scene pass (empty without a scene).
+#[derive(Debug, Default)]
+pub struct SceneFrame {
+    draw: Option<SceneDraw>,
+}
