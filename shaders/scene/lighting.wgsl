@@ -11,8 +11,9 @@
 // V_k comes from the cube shadow map rendered from the photometric centre c (depth along the face
 // axis, reversed and infinite: depth = SHADOW_NEAR_M / distance along the axis), PCSS-like:
 //   1. blocker search: points b on each segment x → s_k (at 1/4, 1/2, 3/4) are looked up; a texel
-//      occludes when its surface lies nearer to c than the receiver plane (through x, normal n)
-//      along the texel centre's own ray (so the receiver's plane never shadows itself);
+//      occludes b when its surface lies nearer to c than (1 + SHADOW_REACH)·|b − c| and nearer
+//      than the receiver plane (through x, normal n) along the texel centre's own ray (so the
+//      receiver's plane never shadows itself);
 //   2. with d_b the mean distance of the blockers found and d_r = |x − c|, the segment x → s_k is
 //      taken to cross the blockers at b_k = x + (s_k − x)(1 − d_b/d_r): V_k = 0 when b_k's texel
 //      occludes. For one planar blocker parallel to the receiver this is exact (similar triangles);
@@ -118,10 +119,14 @@ fn cube_face(d: vec3<f32>) -> u32 {
     return select(5u, 4u, d.z >= 0.0);
 }
 
-// The distance from the light's centre of the surface its shadow map holds in the direction d
-// (from the centre) when that surface lies nearer than the receiver plane through x with normal n
-// along the same texel's ray; −1 otherwise (nothing nearer, or nothing drawn there).
-fn occluder_m(light: Light, d: vec3<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
+// Whether the shadow map of `light` holds a surface that blocks the point b (on a segment from the
+// receiver x towards the opening): the surface seen from the centre c through b lies nearer to c
+// than b's own distance times (1 + SHADOW_REACH) (at b, or a little behind it), and nearer than the
+// receiver plane (through x, normal n) along the same texel's ray (so the receiver's own plane
+// never shadows itself, and surfaces beyond it do not count). Returns that surface's distance from
+// c (m), or −1 when it does not block (or nothing was drawn there).
+fn occluder_m(light: Light, b: vec3<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let d = b - light.centre.xyz;
     let face = cube_face(d);
     let forward = CUBE_FORWARD[face];
     let right = CUBE_RIGHT[face];
@@ -144,13 +149,17 @@ fn occluder_m(light: Light, d: vec3<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
     let cx = (f32(px) + 0.5) / s * 2.0 - 1.0;
     let cy = 1.0 - (f32(py) + 0.5) / s * 2.0;
     let ray = forward + cx * right + cy * up;
+    let surface_m = along_m * length(ray);
+    if (surface_m > length(d) * (1.0 + SHADOW_REACH)) {
+        return -1.0;
+    }
     let denom = dot(n, ray);
     if (denom >= 0.0) {
-        return -1.0;
+        return surface_m;
     }
     let plane_m = dot(n, x - light.centre.xyz) / denom;
     if (along_m < plane_m * (1.0 - SHADOW_RELATIVE_BIAS)) {
-        return along_m * length(ray);
+        return surface_m;
     }
     return -1.0;
 }
@@ -196,7 +205,7 @@ fn light_lx(light: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
             let s = opening_point(light, k);
             for (var j = 1u; j < 4u; j = j + 1u) {
                 let b = x + (s - x) * (f32(j) * 0.25);
-                let o = occluder_m(light, b - c, x, n);
+                let o = occluder_m(light, b, x, n);
                 if (o > 0.0) {
                     blockers = blockers + 1.0;
                     blocker_sum_m = blocker_sum_m + o;
@@ -217,7 +226,7 @@ fn light_lx(light: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
         }
         if (blockers > 0.0) {
             let b = x + to_s * lambda;
-            if (occluder_m(light, b - c, x, n) > 0.0) {
+            if (occluder_m(light, b, x, n) > 0.0) {
                 continue;
             }
         }

@@ -70,7 +70,9 @@ fn selection_constant(mode: SelectionMode) -> String {
 /// The scene pass's constants, generated from `gpu::scene`'s definitions.
 pub(crate) fn scene_constants() -> String {
     use super::scene::lights::{INTENSITY_TABLE_H, INTENSITY_TABLE_W};
-    use super::scene::shadows::{CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M, SHADOW_RELATIVE_BIAS};
+    use super::scene::shadows::{
+        CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M, SHADOW_REACH, SHADOW_RELATIVE_BIAS,
+    };
     let faces = |name: &str, v: &[glam::Vec3; 6]| -> String {
         let items: Vec<String> = v
             .iter()
@@ -82,7 +84,8 @@ pub(crate) fn scene_constants() -> String {
         "const INTENSITY_TABLE_W: u32 = {INTENSITY_TABLE_W}u;\n\
          const INTENSITY_TABLE_H: u32 = {INTENSITY_TABLE_H}u;\n\
          const SHADOW_NEAR_M: f32 = {SHADOW_NEAR_M:?};\n\
-         const SHADOW_RELATIVE_BIAS: f32 = {SHADOW_RELATIVE_BIAS:?};\n{}{}{}\n",
+         const SHADOW_RELATIVE_BIAS: f32 = {SHADOW_RELATIVE_BIAS:?};\n\
+         const SHADOW_REACH: f32 = {SHADOW_REACH:?};\n{}{}{}\n",
         faces("CUBE_FORWARD", &CUBE_FORWARD),
         faces("CUBE_RIGHT", &CUBE_RIGHT),
         faces("CUBE_UP", &CUBE_UP)

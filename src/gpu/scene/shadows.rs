@@ -27,6 +27,11 @@ pub const SHADOW_NEAR_M: f32 = 0.01;
 /// the plane's distance along the texel's ray (depth and interpolation round-off).
 pub const SHADOW_RELATIVE_BIAS: f32 = 2e-3;
 
+/// A texel occludes a point b on a segment towards the opening when its surface lies nearer to the
+/// centre than (1 + this)·|b − centre|: at b or at most this share behind it (surfaces far behind b
+/// are not between b and the opening).
+pub const SHADOW_REACH: f32 = 0.25;
+
 /// The faces' axes (looking direction), in face order.
 pub const CUBE_FORWARD: [Vec3; 6] = [Vec3::X, Vec3::NEG_X, Vec3::Y, Vec3::NEG_Y, Vec3::Z, Vec3::NEG_Z];
 /// The faces' image right (+x in normalised device coordinates).

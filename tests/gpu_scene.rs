@@ -1,0 +1,539 @@
+//! GPU tests of the scene lighting pass (issue 20, direct light) on Vulkan (lavapipe in CI), each
+//! against an independent reference, never against the pass's own output: the illuminance a pixel
+//! shows (E = π·L/ρ_Y, the luminance of its RGB) at points found by casting the pixel's camera ray
+//! through the CPU hierarchy (`scene::bvh`), against I(C, γ)·cos³γ/h² written here, and against the
+//! CPU reference path tracer's direct term (`scene::reference`) in the sample office; the penumbra
+//! of a 1.2 m linear luminaire against the reference's. Measured figures are printed
+//! (`--nocapture`) and quoted in docs/scene-lighting.md.
+//! In CI (CI=true) a missing adapter fails; locally the tests print why they skip.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+mod gpu_common;
+
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{DMat4, DVec3, Vec3};
+use gpu_common::{renderer, GPU_LOCK};
+use lumiview::gpu::{HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc};
+use lumiview::photometry::{load_from_text, LoadOptions, Photometry};
+use lumiview::scene::bvh::Bvh;
+use lumiview::scene::model::luminance_y;
+use lumiview::scene::sample::OFFICE_LUMINAIRES;
+use lumiview::scene::{placement, Material, Scene, SceneLuminaire, SceneParts, SurfacePoint, TraceOptions, Tracer};
+
+/// A synthetic point luminaire with no symmetry: five C planes (0–360°), γ 0–90°.
+const ASYMMETRIC_IES: &str = "IESNA:LM-63-2002\n[TEST] asymmetric point source\nTILT=NONE\n\
+1 -1 1 5 5 1 2 0 0 0\n1 1 10\n0 22.5 45 67.5 90\n0 90 180 270 360\n\
+1000 900 700 400 100\n1000 760 600 300 50\n1000 500 350 150 20\n1000 650 500 250 40\n1000 900 700 400 100\n";
+
+/// A linear luminaire: opening 1.2 m along X (IES length) × 0.1 m along Y (width), I = 1000 cd ·
+/// cos γ below.
+const LINEAR_IES: &str = "IESNA:LM-63-2002\n[TEST] linear 1.2 m\nTILT=NONE\n\
+1 -1 1 5 1 1 2 0.1 1.2 0\n1 1 30\n0 22.5 45 67.5 90\n0\n1000 923.8795 707.1068 382.6834 0\n";
+
+fn photometry_text(text: &str, name: &str) -> Arc<Photometry> {
+    Arc::new(load_from_text(text, name, &LoadOptions::default()).unwrap())
+}
+
+fn scene_of(parts: Vec<(Vec<[DVec3; 3]>, f64)>) -> Scene {
+    let mut p = SceneParts::default();
+    for (m, (tris, rho)) in parts.into_iter().enumerate() {
+        p.material_of.extend(std::iter::repeat_n(m as u32, tris.len()));
+        p.triangles.extend(tris);
+        p.materials.push(Material::grey(rho));
+    }
+    Scene::new(p).unwrap()
+}
+
+/// The floor y = 0 over ±`half` m.
+fn floor(half: f64) -> Vec<[DVec3; 3]> {
+    let c = |x: f64, z: f64| DVec3::new(x, 0.0, z);
+    let (a, b, cc, d) = (c(-half, half), c(half, half), c(half, -half), c(-half, -half));
+    vec![[a, b, cc], [a, cc, d]]
+}
+
+/// The half-plane x ≥ 0 at height `h` (over |z| ≤ 5 m, x ≤ 5 m).
+fn plate(h: f64) -> Vec<[DVec3; 3]> {
+    let c = |x: f64, z: f64| DVec3::new(x, h, z);
+    vec![
+        [c(0.0, -5.0), c(0.0, 5.0), c(5.0, 5.0)],
+        [c(0.0, -5.0), c(5.0, 5.0), c(5.0, -5.0)],
+    ]
+}
+
+/// What a pixel's camera ray hits: the point, the normal turned towards the camera, ρ_Y, the
+/// triangle; `None` for the background or a textured surface.
+#[derive(Debug, Clone, Copy)]
+struct Probe {
+    px: (u32, u32),
+    point: SurfacePoint,
+    rho_y: f64,
+    triangle: usize,
+}
+
+/// The camera ray through the centre of pixel (i, j) (row 0 at the top), world space.
+fn pixel_ray(cam: &HostCamera, w: u32, h: u32, i: u32, j: u32) -> (DVec3, DVec3) {
+    let inv: DMat4 = cam.clip_from_world().as_dmat4().inverse();
+    let x = (f64::from(i) + 0.5) / f64::from(w) * 2.0 - 1.0;
+    let y = 1.0 - (f64::from(j) + 0.5) / f64::from(h) * 2.0;
+    let p0 = inv.project_point3(DVec3::new(x, y, 0.0));
+    let p1 = inv.project_point3(DVec3::new(x, y, 1.0));
+    (p0, (p1 - p0).normalize())
+}
+
+fn probe(scene: &Scene, bvh: &Bvh, cam: &HostCamera, w: u32, h: u32, i: u32, j: u32) -> Option<Probe> {
+    let (o, d) = pixel_ray(cam, w, h, i, j);
+    let hit = bvh.closest_hit(o, d, 1e3)?;
+    let tri = scene.triangles()[hit.triangle];
+    let material = &scene.materials()[scene.material_of()[hit.triangle] as usize];
+    if material.base_color_texture.is_some() {
+        return None;
+    }
+    let mut n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize();
+    if n.dot(d) > 0.0 {
+        n = -n;
+    }
+    Some(Probe {
+        px: (i, j),
+        point: SurfacePoint {
+            position_m: o + d * hit.t,
+            normal: n,
+        },
+        rho_y: luminance_y(material.base_color_factor),
+        triangle: hit.triangle,
+    })
+}
+
+/// Renders `scene` lit by `lights` (photometry, placement matrix) and returns the luminance
+/// (cd/m², Y of the linear RGB) per pixel, row 0 at the top.
+fn render_luminance(
+    r: &mut Renderer,
+    scene: &Scene,
+    lights: &[(Arc<Photometry>, DMat4)],
+    cam: &HostCamera,
+    w: u32,
+    h: u32,
+) -> Vec<f64> {
+    r.set_scene(scene).unwrap();
+    let mut ids = Vec::new();
+    let mut lums: Vec<(usize, lumiview::gpu::LuminaireId)> = Vec::new();
+    for (p, m) in lights {
+        let key = Arc::as_ptr(p) as usize;
+        let lum = match lums.iter().find(|(k, _)| *k == key) {
+            Some((_, id)) => *id,
+            None => {
+                let id = r.add_photometry(p.clone()).unwrap();
+                lums.push((key, id));
+                id
+            }
+        };
+        ids.push(r.add_instance(lum, m.as_mat4()).unwrap());
+    }
+    let mut t = RenderTarget::new(&r.ctx, &TargetDesc::luminance(w, h)).unwrap();
+    r.render(&mut t, cam, &RenderOptions::default()).unwrap();
+    let px = t.read(&r.ctx, lumiview::gpu::Attachment::Color).unwrap();
+    for id in ids {
+        r.remove_instance(id).unwrap();
+    }
+    px.chunks_exact(16)
+        .map(|c| {
+            let f = |k: usize| f64::from(f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]));
+            0.2126 * f(0) + 0.7152 * f(1) + 0.0722 * f(2)
+        })
+        .collect()
+}
+
+/// A GL-convention perspective camera at `eye` looking at `at`, +Y up, top-left origin.
+fn perspective(eye: Vec3, at: Vec3, fov_deg: f32, aspect: f32) -> HostCamera {
+    HostCamera {
+        view: gpu_common::look_at(eye, at, Vec3::Y),
+        projection: gpu_common::gl_perspective(fov_deg.to_radians(), aspect, 0.05, 50.0),
+        depth_range: lumiview::gpu::DepthRange::NegOneToOne,
+        reversed_z: false,
+        origin: lumiview::gpu::Origin::TopLeft,
+    }
+}
+
+/// E = I(C, γ) cos³γ / h² for a luminaire `h` m above the receiver at scene offset (dx, dz), C0
+/// along +X turned by `yaw_deg` about +Y (C0 = (cos ψ, 0, −sin ψ), C90 = (−sin ψ, 0, −cos ψ)).
+fn point_reference_lx(p: &Photometry, h: f64, yaw_deg: f64, dx: f64, dz: f64) -> f64 {
+    let psi = yaw_deg.to_radians();
+    let (c0, c90) = ((psi.cos(), -psi.sin()), (-psi.sin(), -psi.cos()));
+    let (along0, along90) = (dx * c0.0 + dz * c0.1, dx * c90.0 + dz * c90.1);
+    let mut c = along90.atan2(along0).to_degrees();
+    if c < 0.0 {
+        c += 360.0;
+    }
+    let gamma = (dx.hypot(dz) / h).atan();
+    p.intensity(c, gamma.to_degrees()) * gamma.cos().powi(3) / (h * h)
+}
+
+#[test]
+fn a_luminaire_over_an_open_plane_gives_i_cos3_over_h2() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let rho = 0.5;
+    let scene = scene_of(vec![(floor(20.0), rho)]);
+    let bvh = Bvh::build(&scene);
+    let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    let (h, yaw) = (2.5, 30.0);
+    let (w, hgt) = (96u32, 64u32);
+    let cam = perspective(Vec3::new(0.5, 1.6, 4.5), Vec3::new(-0.3, 0.0, -0.5), 70.0, w as f32 / hgt as f32);
+    let lum = render_luminance(&mut r, &scene, &[(p.clone(), placement(0.0, h, 0.0, yaw))], &cam, w, hgt);
+    let mut worst: f64 = 0.0;
+    let mut probes = 0;
+    for j in (2..hgt).step_by(6) {
+        for i in (2..w).step_by(9) {
+            let Some(pr) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
+                continue;
+            };
+            let x = pr.point.position_m;
+            let want = point_reference_lx(&p, h, yaw, x.x, x.z);
+            if want < 1.0 {
+                continue;
+            }
+            let got = std::f64::consts::PI * lum[(j * w + i) as usize] / pr.rho_y;
+            let rel = (got - want).abs() / want;
+            worst = worst.max(rel);
+            probes += 1;
+            assert!(rel < 0.005, "pixel ({i}, {j}) at {x}: {got} lx vs {want} lx");
+        }
+    }
+    eprintln!("open plane, asymmetric point source at {h} m, yaw {yaw}°: {probes} probe pixels, worst {worst:.1e}");
+    assert!(probes >= 20, "{probes} probes");
+    gpu_common::assert_no_validation_messages();
+}
+
+#[test]
+fn two_hundred_fifty_six_luminaires_light_the_plane_within_their_influence() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let rho = 0.6;
+    let scene = scene_of(vec![(floor(25.0), rho)]);
+    let bvh = Bvh::build(&scene);
+    let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    // 16 × 16 luminaires 2 m apart at 2.5 m, yaws varied; a lux floor of 20 lx: each reaches
+    // √(1000 / 20) ≈ 7.1 m, so the tiles' lists and the per-fragment test leave most out.
+    let floor_lx: f64 = 20.0;
+    r.set_scene_settings(lumiview::gpu::scene::SceneSettings {
+        lux_floor_lx: floor_lx as f32,
+        ..Default::default()
+    })
+    .unwrap();
+    let mut placed = Vec::new();
+    for i in 0..16 {
+        for k in 0..16 {
+            let (x, z, yaw) = (-15.0 + 2.0 * f64::from(i), -15.0 + 2.0 * f64::from(k), f64::from(i * 16 + k) * 37.0);
+            placed.push((x, z, yaw));
+        }
+    }
+    let lights: Vec<(Arc<Photometry>, DMat4)> =
+        placed.iter().map(|&(x, z, yaw)| (p.clone(), placement(x, 2.5, z, yaw))).collect();
+    let (w, hgt) = (128u32, 72u32);
+    let cam = perspective(Vec3::new(0.0, 9.0, 14.0), Vec3::new(0.0, 0.0, 0.0), 70.0, w as f32 / hgt as f32);
+    let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
+    let (mut probes, mut worst_above, mut worst_below) = (0, 0.0f64, 0.0f64);
+    for j in (4..hgt).step_by(8) {
+        for i in (4..w).step_by(12) {
+            let Some(pr) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
+                continue;
+            };
+            let x = pr.point.position_m;
+            let each: Vec<f64> = placed
+                .iter()
+                .map(|&(lx, lz, yaw)| point_reference_lx(&p, 2.5, yaw, x.x - lx, x.z - lz))
+                .collect();
+            let all: f64 = each.iter().sum();
+            let got = std::f64::consts::PI * lum[(j * w + i) as usize] / pr.rho_y;
+            // What the cut-off may leave out: the luminaires beyond their influence radius, each
+            // under the floor there.
+            let radius = (1000.0 / floor_lx).sqrt();
+            let beyond: f64 = placed
+                .iter()
+                .zip(&each)
+                .filter(|((lx, lz, _), _)| (x - DVec3::new(*lx, 2.5, *lz)).length() > radius)
+                .map(|(_, e)| *e)
+                .sum();
+            assert!(
+                got <= all * 1.001 && got >= (all - beyond) * 0.999,
+                "pixel ({i}, {j}) at {x}: {got} lx; all luminaires {all} lx, those in reach {}",
+                all - beyond
+            );
+            worst_above = worst_above.max(got / (all - beyond) - 1.0);
+            worst_below = worst_below.max(all - got);
+            probes += 1;
+        }
+    }
+    eprintln!(
+        "256 luminaires, lux floor {floor_lx} lx: {probes} probes within [in-reach sum, full sum]: at most {:.1} lx below \
+         the full sum (left out by the cut-off), {:.1e} above the in-reach sum",
+        worst_below,
+        worst_above
+    );
+    assert!(probes >= 20);
+    gpu_common::assert_no_validation_messages();
+}
+
+/// The linear luminaire's visible share along the floor line z = 0 under the plate, as the GPU
+/// shows it (E with the plate / E without) and as the reference computes it, at the floor points
+/// the pixels of an orthographic top view between plate and floor see.
+#[test]
+fn a_linear_luminaire_casts_the_references_penumbra() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let (h, h_plate) = (2.5, 1.0);
+    let linear = photometry_text(LINEAR_IES, "linear.ies");
+    let open = scene_of(vec![(floor(10.0), 0.5)]);
+    let shaded = scene_of(vec![(floor(10.0), 0.5), (plate(h_plate), 0.5)]);
+    let (w, hgt) = (400u32, 4u32);
+    // Looking down from 0.5 m (below the plate, which lies behind the camera), 5 mm pixels.
+    let cam = HostCamera::from_ortho(DVec3::Y, DVec3::new(0.0, 0.3, 0.0), 0.005, w, hgt, 0.35);
+    let lights = [(linear.clone(), placement(0.0, h, 0.0, 0.0))];
+    let e0 = render_luminance(&mut r, &open, &lights, &cam, w, hgt);
+    let e1 = render_luminance(&mut r, &shaded, &lights, &cam, w, hgt);
+    let bvh = Bvh::build(&open);
+    let row = hgt / 2;
+    let mut xs = Vec::new();
+    let mut gpu = Vec::new();
+    for i in 0..w {
+        let pr = probe(&open, &bvh, &cam, w, hgt, i, row).unwrap();
+        xs.push(pr.point.position_m);
+        let k = (row * w + i) as usize;
+        gpu.push(e1[k] / e0[k]);
+    }
+    let lum = SceneLuminaire {
+        photometry: linear.clone(),
+        scene_from_luminaire: lights[0].1,
+    };
+    let points: Vec<SurfacePoint> = xs
+        .iter()
+        .map(|&p| SurfacePoint {
+            position_m: p,
+            normal: DVec3::Y,
+        })
+        .collect();
+    let opts = TraceOptions {
+        paths_per_point: 0,
+        direct_estimates: 4,
+        area_samples: 1024,
+        seed: 7,
+        ..TraceOptions::default()
+    };
+    let r0 = lumiview::scene::illuminance(&open, std::slice::from_ref(&lum), &points, &opts).unwrap();
+    let r1 = lumiview::scene::illuminance(&shaded, std::slice::from_ref(&lum), &points, &opts).unwrap();
+    let reference: Vec<f64> = r0.iter().zip(&r1).map(|(a, b)| b.direct_lx / a.direct_lx).collect();
+    let x: Vec<f64> = xs.iter().map(|p| p.x).collect();
+    let width = |f: &[f64], tol: f64| -> (f64, f64) {
+        // x grows or falls along the row: take the extremes of each set.
+        let lit: Vec<f64> = x.iter().zip(f).filter(|(_, v)| **v >= 1.0 - tol).map(|(x, _)| *x).collect();
+        let dark: Vec<f64> = x.iter().zip(f).filter(|(_, v)| **v <= tol).map(|(x, _)| *x).collect();
+        (
+            lit.iter().copied().fold(f64::MIN, f64::max),
+            dark.iter().copied().fold(f64::MAX, f64::min),
+        )
+    };
+    let (g_lit, g_dark) = width(&gpu, 1e-4);
+    let (r_lit, r_dark) = width(&reference, 1e-9);
+    let (gw, rw) = (g_dark - g_lit, r_dark - r_lit);
+    let mean_abs = gpu.iter().zip(&reference).map(|(a, b)| (a - b).abs()).sum::<f64>() / gpu.len() as f64;
+    eprintln!(
+        "penumbra of a 1.2 m linear luminaire at {h} m under an edge at {h_plate} m: GPU lit to x = {g_lit:.3}, dark from \
+         {g_dark:.3}: width {gw:.3} m; reference {r_lit:.3} … {r_dark:.3}: {rw:.3} m ({:+.1} %); visible share mean \
+         |GPU − reference| {mean_abs:.3}",
+        100.0 * (gw / rw - 1.0)
+    );
+    assert!((gw / rw - 1.0).abs() < 0.2, "penumbra width {gw} vs the reference's {rw}");
+    for (k, (&g, &rf)) in gpu.iter().zip(&reference).enumerate() {
+        if rf >= 1.0 - 1e-9 || rf <= 1e-9 {
+            // Fully lit or fully dark in the reference, away from the penumbra's ends by 2 cm.
+            let near_end = (x[k] - r_lit).abs() < 0.02 || (x[k] - r_dark).abs() < 0.02;
+            if !near_end {
+                assert!((g - rf).abs() < 0.01, "x = {}: GPU share {g} vs {rf}", x[k]);
+            }
+        }
+    }
+    gpu_common::assert_no_validation_messages();
+}
+
+/// Points of the opening of the office's linear luminaire (luminaire frame), for classifying
+/// probes: 48 × 4 over its 1.2 × 0.1 m.
+fn opening_points() -> Vec<DVec3> {
+    let mut v = Vec::new();
+    for i in 0..48 {
+        for j in 0..4 {
+            v.push(DVec3::new(
+                -0.6 + 1.2 * (f64::from(i) + 0.5) / 48.0,
+                -0.05 + 0.1 * (f64::from(j) + 0.5) / 4.0,
+                0.0,
+            ));
+        }
+    }
+    v
+}
+
+/// Whether the ray o + t d meets the linear luminaire's opening (1.2 × 0.1 m in its frame's z = 0
+/// plane) grown by `margin_m`.
+fn hits_opening(scene_from_luminaire: &DMat4, o: DVec3, d: DVec3, margin_m: f64) -> bool {
+    let inv = scene_from_luminaire.inverse();
+    let (o, d) = (inv.transform_point3(o), inv.transform_vector3(d));
+    if d.z.abs() < 1e-12 {
+        return false;
+    }
+    let t = -o.z / d.z;
+    let p = o + t * d;
+    t > 0.0 && p.x.abs() <= 0.6 + margin_m && p.y.abs() <= 0.05 + margin_m
+}
+
+/// Whether each luminaire is fully seen (1), fully hidden (0) or partly seen (between) from x,
+/// by shadow rays to its opening's points; luminaires behind the receiving side count as hidden.
+fn seen_shares(bvh: &Bvh, x: DVec3, n: DVec3, lights: &[DMat4]) -> Vec<f64> {
+    let pts = opening_points();
+    lights
+        .iter()
+        .map(|m| {
+            let mut seen = 0;
+            for p in &pts {
+                let s = m.transform_point3(*p);
+                let d = s - x;
+                if d.dot(n) <= 0.0 {
+                    continue;
+                }
+                let len = d.length();
+                if !bvh.occluded(x + n * 1e-7, d / len, len) {
+                    seen += 1;
+                }
+            }
+            f64::from(seen) / pts.len() as f64
+        })
+        .collect()
+}
+
+#[test]
+fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
+    let scene = lumiview::scene::load(&glb).unwrap();
+    let bvh = Bvh::build(&scene);
+    let linear = photometry_text(LINEAR_IES, "linear.ies");
+    let mats: Vec<DMat4> = OFFICE_LUMINAIRES.iter().map(|p| p.matrix()).collect();
+    let lights: Vec<(Arc<Photometry>, DMat4)> = mats.iter().map(|m| (linear.clone(), *m)).collect();
+    let (w, hgt) = (160u32, 112u32);
+    let cam = perspective(Vec3::new(2.8, 1.7, 1.8), Vec3::new(-1.0, 0.5, -0.9), 75.0, w as f32 / hgt as f32);
+    let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
+    // Probe pixels on a grid, kept where the pixel and its four neighbours see one flat surface
+    // and no luminaire's opening (the far-field pass draws it there, over the lit room).
+    let mut probes = Vec::new();
+    for j in (3..hgt - 3).step_by(5) {
+        for i in (3..w - 3).step_by(5) {
+            let Some(p) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
+                continue;
+            };
+            let (o, d) = pixel_ray(&cam, w, hgt, i, j);
+            if mats.iter().any(|m| hits_opening(m, o, d, 0.05)) {
+                continue;
+            }
+            let same = [(i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)].iter().all(|&(a, b)| {
+                probe(&scene, &bvh, &cam, w, hgt, a, b).is_some_and(|q| {
+                    q.point.normal.dot(p.point.normal) > 0.9999
+                        && (q.point.position_m - p.point.position_m).dot(p.point.normal).abs() < 1e-3
+                })
+            });
+            if same {
+                probes.push(p);
+            }
+        }
+    }
+    let tracer = Tracer::new(
+        &scene,
+        &lights
+            .iter()
+            .map(|(p, m)| SceneLuminaire {
+                photometry: p.clone(),
+                scene_from_luminaire: *m,
+            })
+            .collect::<Vec<_>>(),
+    )
+    .unwrap();
+    let opts = TraceOptions {
+        paths_per_point: 0,
+        direct_estimates: 4,
+        area_samples: 256,
+        seed: 3,
+        ..TraceOptions::default()
+    };
+    let points: Vec<SurfacePoint> = probes.iter().map(|p| p.point).collect();
+    let reference = tracer.illuminance(&points, &opts).unwrap();
+    // Classify: every luminaire fully seen or fully hidden at the point and 3 cm around it (in
+    // its plane), or some luminaire partly seen (penumbra).
+    let (mut all_lit, mut some_hidden, mut all_hidden, mut penumbra) = (0, 0, 0, 0);
+    let mut worst_clear: f64 = 0.0;
+    let mut pen_err = Vec::new();
+    let mut max_se: f64 = 0.0;
+    let mut failures = Vec::new();
+    for (p, rf) in probes.iter().zip(&reference) {
+        let x = p.point.position_m;
+        let n = p.point.normal;
+        let (t1, t2) = {
+            let a = if n.x.abs() < 0.9 { DVec3::X } else { DVec3::Z };
+            let t1 = n.cross(a).normalize();
+            (t1, n.cross(t1))
+        };
+        let shares = seen_shares(&bvh, x, n, &mats);
+        let clear = shares.iter().all(|s| *s == 0.0 || *s == 1.0)
+            && [t1, -t1, t2, -t2]
+                .iter()
+                .all(|t| seen_shares(&bvh, x + 0.03 * *t, n, &mats) == shares);
+        let got = std::f64::consts::PI * lum[(p.px.1 * w + p.px.0) as usize] / p.rho_y;
+        let want = rf.direct_lx;
+        if clear {
+            let seen = shares.iter().filter(|s| **s == 1.0).count();
+            match seen {
+                6 => all_lit += 1,
+                0 => all_hidden += 1,
+                _ => some_hidden += 1,
+            }
+            max_se = max_se.max(rf.direct_se_lx / want.max(1e-9));
+            let err = (got - want).abs();
+            let rel = err / want.max(1e-9);
+            if want > 0.0 {
+                worst_clear = worst_clear.max(rel);
+            }
+            assert!(err <= 0.03 * want + 1e-3, "pixel {:?} at {x:.3}: GPU {got} lx vs reference {want} lx", p.px);
+            if err > 0.01 * want + 1e-3 {
+                failures.push(format!(
+                    "pixel {:?} at {x:.3} (normal {n}, triangle {}), luminaires seen {shares:?}: GPU {got:.2} lx vs \
+                     reference {want:.2} lx",
+                    p.px, p.triangle
+                ));
+            }
+        } else {
+            penumbra += 1;
+            pen_err.push((got - want) / want.max(1.0));
+        }
+    }
+    let clear = all_lit + some_hidden + all_hidden;
+    pen_err.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+    let median_pen = pen_err.get(pen_err.len() / 2).copied().unwrap_or(0.0);
+    let worst_pen = pen_err.last().copied().unwrap_or(0.0);
+    eprintln!(
+        "office, 6 × linear 1.2 m luminaires: {} probes; fully lit or shadowed {clear} (all six seen {all_lit}, some hidden \
+         {some_hidden}, all hidden {all_hidden}): worst {:.2} % (reference standard error ≤ {:.2} %); penumbra {penumbra}: \
+         median |error| {:.1} %, worst {:.1} %",
+        probes.len(),
+        100.0 * worst_clear,
+        100.0 * max_se,
+        100.0 * median_pen.abs(),
+        100.0 * worst_pen.abs()
+    );
+    // Known: a receiver in a crevice (the 10 cm gap between the cabinet's back and the wall) can
+    // read the cabinet just beyond a blocker-search point as a blocker (docs/scene-lighting.md):
+    // at most 1 % of the clear probes may be off by 1–3 %, and they are printed.
+    eprintln!("{} of {clear} clear probes off by more than 1 %:\n{}", failures.len(), failures.join("\n"));
+    assert!(failures.len() * 100 <= clear, "{} of {clear} clear probes off by more than 1 %", failures.len());
+    assert!(clear + penumbra >= 50 && clear >= 30 && penumbra >= 5, "probe counts");
+    assert!(all_lit > 0 && some_hidden > 0, "both kinds of clear probes");
+    gpu_common::assert_no_validation_messages();
+}
