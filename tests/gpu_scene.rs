@@ -180,8 +180,20 @@ fn a_luminaire_over_an_open_plane_gives_i_cos3_over_h2() {
     let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
     let (h, yaw) = (2.5, 30.0);
     let (w, hgt) = (96u32, 64u32);
-    let cam = perspective(Vec3::new(0.5, 1.6, 4.5), Vec3::new(-0.3, 0.0, -0.5), 70.0, w as f32 / hgt as f32);
-    let lum = render_luminance(&mut r, &scene, &[(p.clone(), placement(0.0, h, 0.0, yaw))], &cam, w, hgt);
+    let cam = perspective(
+        Vec3::new(0.5, 1.6, 4.5),
+        Vec3::new(-0.3, 0.0, -0.5),
+        70.0,
+        w as f32 / hgt as f32,
+    );
+    let lum = render_luminance(
+        &mut r,
+        &scene,
+        &[(p.clone(), placement(0.0, h, 0.0, yaw))],
+        &cam,
+        w,
+        hgt,
+    );
     let mut worst: f64 = 0.0;
     let mut probes = 0;
     for j in (2..hgt).step_by(6) {
@@ -225,14 +237,25 @@ fn two_hundred_fifty_six_luminaires_light_the_plane_within_their_influence() {
     let mut placed = Vec::new();
     for i in 0..16 {
         for k in 0..16 {
-            let (x, z, yaw) = (-15.0 + 2.0 * f64::from(i), -15.0 + 2.0 * f64::from(k), f64::from(i * 16 + k) * 37.0);
+            let (x, z, yaw) = (
+                -15.0 + 2.0 * f64::from(i),
+                -15.0 + 2.0 * f64::from(k),
+                f64::from(i * 16 + k) * 37.0,
+            );
             placed.push((x, z, yaw));
         }
     }
-    let lights: Vec<(Arc<Photometry>, DMat4)> =
-        placed.iter().map(|&(x, z, yaw)| (p.clone(), placement(x, 2.5, z, yaw))).collect();
+    let lights: Vec<(Arc<Photometry>, DMat4)> = placed
+        .iter()
+        .map(|&(x, z, yaw)| (p.clone(), placement(x, 2.5, z, yaw)))
+        .collect();
     let (w, hgt) = (128u32, 72u32);
-    let cam = perspective(Vec3::new(0.0, 9.0, 14.0), Vec3::new(0.0, 0.0, 0.0), 70.0, w as f32 / hgt as f32);
+    let cam = perspective(
+        Vec3::new(0.0, 9.0, 14.0),
+        Vec3::new(0.0, 0.0, 0.0),
+        70.0,
+        w as f32 / hgt as f32,
+    );
     let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
     let (mut probes, mut worst_above, mut worst_below) = (0, 0.0f64, 0.0f64);
     for j in (4..hgt).step_by(8) {
@@ -327,7 +350,12 @@ fn a_linear_luminaire_casts_the_references_penumbra() {
     let x: Vec<f64> = xs.iter().map(|p| p.x).collect();
     let width = |f: &[f64], tol: f64| -> (f64, f64) {
         // x grows or falls along the row: take the extremes of each set.
-        let lit: Vec<f64> = x.iter().zip(f).filter(|(_, v)| **v >= 1.0 - tol).map(|(x, _)| *x).collect();
+        let lit: Vec<f64> = x
+            .iter()
+            .zip(f)
+            .filter(|(_, v)| **v >= 1.0 - tol)
+            .map(|(x, _)| *x)
+            .collect();
         let dark: Vec<f64> = x.iter().zip(f).filter(|(_, v)| **v <= tol).map(|(x, _)| *x).collect();
         (
             lit.iter().copied().fold(f64::MIN, f64::max),
@@ -344,7 +372,10 @@ fn a_linear_luminaire_casts_the_references_penumbra() {
          |GPU − reference| {mean_abs:.3}",
         100.0 * (gw / rw - 1.0)
     );
-    assert!((gw / rw - 1.0).abs() < 0.2, "penumbra width {gw} vs the reference's {rw}");
+    assert!(
+        (gw / rw - 1.0).abs() < 0.2,
+        "penumbra width {gw} vs the reference's {rw}"
+    );
     for (k, (&g, &rf)) in gpu.iter().zip(&reference).enumerate() {
         if rf >= 1.0 - 1e-9 || rf <= 1e-9 {
             // Fully lit or fully dark in the reference, away from the penumbra's ends by 2 cm.
@@ -421,7 +452,12 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
     let mats: Vec<DMat4> = OFFICE_LUMINAIRES.iter().map(|p| p.matrix()).collect();
     let lights: Vec<(Arc<Photometry>, DMat4)> = mats.iter().map(|m| (linear.clone(), *m)).collect();
     let (w, hgt) = (160u32, 112u32);
-    let cam = perspective(Vec3::new(2.8, 1.7, 1.8), Vec3::new(-1.0, 0.5, -0.9), 75.0, w as f32 / hgt as f32);
+    let cam = perspective(
+        Vec3::new(2.8, 1.7, 1.8),
+        Vec3::new(-1.0, 0.5, -0.9),
+        75.0,
+        w as f32 / hgt as f32,
+    );
     let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
     // Probe pixels on a grid, kept where the pixel and its four neighbours see one flat surface
     // and no luminaire's opening (the far-field pass draws it there, over the lit room).
@@ -501,7 +537,11 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
             if want > 0.0 {
                 worst_clear = worst_clear.max(rel);
             }
-            assert!(err <= 0.03 * want + 1e-3, "pixel {:?} at {x:.3}: GPU {got} lx vs reference {want} lx", p.px);
+            assert!(
+                err <= 0.03 * want + 1e-3,
+                "pixel {:?} at {x:.3}: GPU {got} lx vs reference {want} lx",
+                p.px
+            );
             if err > 0.01 * want + 1e-3 {
                 failures.push(format!(
                     "pixel {:?} at {x:.3} (normal {n}, triangle {}), luminaires seen {shares:?}: GPU {got:.2} lx vs \
@@ -531,8 +571,16 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
     // Known: a receiver in a crevice (the 10 cm gap between the cabinet's back and the wall) can
     // read the cabinet just beyond a blocker-search point as a blocker (docs/scene-lighting.md):
     // at most 1 % of the clear probes may be off by 1–3 %, and they are printed.
-    eprintln!("{} of {clear} clear probes off by more than 1 %:\n{}", failures.len(), failures.join("\n"));
-    assert!(failures.len() * 100 <= clear, "{} of {clear} clear probes off by more than 1 %", failures.len());
+    eprintln!(
+        "{} of {clear} clear probes off by more than 1 %:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
+    assert!(
+        failures.len() * 100 <= clear,
+        "{} of {clear} clear probes off by more than 1 %",
+        failures.len()
+    );
     assert!(clear + penumbra >= 50 && clear >= 30 && penumbra >= 5, "probe counts");
     assert!(all_lit > 0 && some_hidden > 0, "both kinds of clear probes");
     gpu_common::assert_no_validation_messages();

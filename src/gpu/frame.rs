@@ -1,7 +1,7 @@
 //! One frame: what the host asks for (camera, render options), validated once against the target,
 //! and the sequence that records every pass into one render pass of that target.
 //!
-//! A pass ([`Pass`]: the far-field pass, the near-field pass, the next one) prepares its draws for a
+//! A pass ([`Pass`]: the scene lighting pass, the far-field pass, the near-field pass) prepares its draws for a
 //! [`FrameView`] (uploads, uniforms, pipelines) and records them into the frame's render pass;
 //! [`render`] clears the target, records the prepared passes in order, hands the exported images to
 //! the host and submits. A `FrameView` exists only validated, so no pass checks the camera or the
@@ -144,7 +144,9 @@ pub trait Pass {
     type Instance;
     /// The pass's draws of one frame, ready to record.
     type Prepared;
-    /// Prepares a frame: residency, uniforms, pipelines for the target's formats.
+    /// Prepares a frame: residency, uniforms, pipelines for the target's formats. Work that needs
+    /// its own render passes (the scene pass's shadow maps) is encoded and submitted here: the
+    /// queue runs it before the frame's render pass.
     fn prepare(
         &mut self,
         ctx: &GpuContext,

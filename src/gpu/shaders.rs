@@ -8,7 +8,7 @@
 //! 3. the pass's own code: `shaders/farfield.wgsl`; the parts of `shaders/nearfield/` joined in the
 //!    order of `NEARFIELD` (`pass.wgsl` says what each part holds); `shaders/scene/lighting.wgsl`
 //!    and `shaders/scene/shadow.wgsl`, after the scene pass's own generated constants (intensity
-//!    table size, the shadow maps' near plane and bias, the cube faces' axes: [`scene_constants`]).
+//!    table size, the shadow maps' near plane and bias, the cube faces' axes: `scene_constants`).
 //!
 //! The unit tests below parse and validate every assembled shader with naga (the version wgpu
 //! uses), without a GPU, and check each GPU struct's size and member offsets and the near-field
@@ -70,15 +70,16 @@ fn selection_constant(mode: SelectionMode) -> String {
 /// The scene pass's constants, generated from `gpu::scene`'s definitions.
 pub(crate) fn scene_constants() -> String {
     use super::scene::lights::{INTENSITY_TABLE_H, INTENSITY_TABLE_W};
-    use super::scene::shadows::{
-        CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M, SHADOW_REACH, SHADOW_RELATIVE_BIAS,
-    };
+    use super::scene::shadows::{CUBE_FORWARD, CUBE_RIGHT, CUBE_UP, SHADOW_NEAR_M, SHADOW_REACH, SHADOW_RELATIVE_BIAS};
     let faces = |name: &str, v: &[glam::Vec3; 6]| -> String {
         let items: Vec<String> = v
             .iter()
             .map(|a| format!("vec3<f32>({:?}, {:?}, {:?})", a.x, a.y, a.z))
             .collect();
-        format!("const {name}: array<vec3<f32>, 6> = array<vec3<f32>, 6>({});\n", items.join(", "))
+        format!(
+            "const {name}: array<vec3<f32>, 6> = array<vec3<f32>, 6>({});\n",
+            items.join(", ")
+        )
     };
     format!(
         "const INTENSITY_TABLE_W: u32 = {INTENSITY_TABLE_W}u;\n\
@@ -94,12 +95,24 @@ pub(crate) fn scene_constants() -> String {
 
 /// The scene pass's lighting shader as compiled.
 pub fn scene() -> String {
-    [generated_constants(), scene_constants(), COMMON.to_string(), SCENE_LIGHTING.to_string()].concat()
+    [
+        generated_constants(),
+        scene_constants(),
+        COMMON.to_string(),
+        SCENE_LIGHTING.to_string(),
+    ]
+    .concat()
 }
 
 /// The scene pass's shadow-map shader as compiled.
 pub fn scene_shadow() -> String {
-    [generated_constants(), scene_constants(), COMMON.to_string(), SCENE_SHADOW.to_string()].concat()
+    [
+        generated_constants(),
+        scene_constants(),
+        COMMON.to_string(),
+        SCENE_SHADOW.to_string(),
+    ]
+    .concat()
 }
 
 /// The far-field shader as compiled.
@@ -276,13 +289,20 @@ mod tests {
             ref e => panic!("{e:?}"),
         };
         assert_eq!(scalar(constant("SHADOW_NEAR_M")), SHADOW_NEAR_M);
-        for (name, want) in [("CUBE_FORWARD", CUBE_FORWARD), ("CUBE_RIGHT", CUBE_RIGHT), ("CUBE_UP", CUBE_UP)] {
+        for (name, want) in [
+            ("CUBE_FORWARD", CUBE_FORWARD),
+            ("CUBE_RIGHT", CUBE_RIGHT),
+            ("CUBE_UP", CUBE_UP),
+        ] {
             let naga::Expression::Compose { ref components, .. } = m.global_expressions[constant(name)] else {
                 panic!("{name} is not an array");
             };
             assert_eq!(components.len(), 6, "{name}");
             for (f, v) in components.iter().enumerate() {
-                let naga::Expression::Compose { components: ref xyz, .. } = m.global_expressions[*v] else {
+                let naga::Expression::Compose {
+                    components: ref xyz, ..
+                } = m.global_expressions[*v]
+                else {
                     panic!("{name}[{f}]");
                 };
                 let got: Vec<f32> = xyz.iter().map(|h| scalar(*h)).collect();

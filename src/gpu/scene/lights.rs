@@ -66,7 +66,11 @@ pub fn intensity_table(p: &Photometry) -> Vec<f32> {
             let c = 360.0 * f64::from(i) / f64::from(INTENSITY_TABLE_W - 1);
             let g = 180.0 * f64::from(j) / f64::from(INTENSITY_TABLE_H - 1);
             let cd = p.intensity(c, g);
-            out.push(if cd.is_finite() { cd.clamp(0.0, f64::from(f32::MAX)) as f32 } else { 0.0 });
+            out.push(if cd.is_finite() {
+                cd.clamp(0.0, f64::from(f32::MAX)) as f32
+            } else {
+                0.0
+            });
         }
     }
     out
@@ -156,12 +160,7 @@ pub fn light_record(light: &PlacedLight<'_>, index: usize, lux_floor_lx: f32) ->
 }
 
 /// The per-tile lists: `2 · tiles` words of (first, count) pairs, then the indices they point at.
-pub fn tile_lists(
-    clip_from_world: Mat4,
-    width: u32,
-    height: u32,
-    lights: &[LightRecord],
-) -> (u32, u32, Vec<u32>) {
+pub fn tile_lists(clip_from_world: Mat4, width: u32, height: u32, lights: &[LightRecord]) -> (u32, u32, Vec<u32>) {
     let tiles_x = width.div_ceil(TILE_PX);
     let tiles_y = height.div_ceil(TILE_PX);
     let mut per_tile: Vec<Vec<u32>> = vec![Vec::new(); (tiles_x * tiles_y) as usize];
@@ -207,7 +206,7 @@ fn screen_rect(clip_from_world: Mat4, c: Vec3, r: f32) -> Option<(f32, f32, f32,
             if k & 4 == 0 { -r } else { r },
         );
         let p: Vec4 = clip_from_world * (c + o).extend(1.0);
-        if !(p.w > 1e-6) {
+        if p.w.is_nan() || p.w <= 1e-6 {
             return Some((-1.0, -1.0, 1.0, 1.0));
         }
         let (x, y) = (p.x / p.w, p.y / p.w);
@@ -248,10 +247,19 @@ mod tests {
             centre: [x, 2.0, z, r],
             ..bytemuck::Zeroable::zeroed()
         };
-        let (tx, ty, w) = tile_lists(clip, 64, 64, &[rec(-3.0, -3.0, 0.5), rec(0.0, 0.0, 100.0), rec(50.0, 0.0, 1.0)]);
+        let (tx, ty, w) = tile_lists(
+            clip,
+            64,
+            64,
+            &[rec(-3.0, -3.0, 0.5), rec(0.0, 0.0, 100.0), rec(50.0, 0.0, 1.0)],
+        );
         assert_eq!((tx, ty), (4, 4));
         let list = |t: usize| &w[w[2 * t] as usize..(w[2 * t] + w[2 * t + 1]) as usize];
         assert_eq!(list(0), &[0, 1], "top-left tile: the small light and the big one");
-        assert_eq!(list(15), &[1], "bottom-right tile: the big one only; the far one nowhere");
+        assert_eq!(
+            list(15),
+            &[1],
+            "bottom-right tile: the big one only; the far one nowhere"
+        );
     }
 }

@@ -42,7 +42,9 @@ use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat};
 use super::{Arg, GpuError};
 use crate::scene::Scene;
-use lights::{LightRecord, PlacedLight, INTENSITY_TABLE_H, INTENSITY_TABLE_W, MAX_INTENSITY_TABLES, MAX_TABLES_PER_ROW};
+use lights::{
+    LightRecord, PlacedLight, INTENSITY_TABLE_H, INTENSITY_TABLE_W, MAX_INTENSITY_TABLES, MAX_TABLES_PER_ROW,
+};
 use shadows::{face_clip_from_world, ShadowLayout, MIN_FACE_PX};
 
 /// How the scene pass lights.
@@ -556,7 +558,13 @@ impl ScenePass {
             }
         }
         let view = ctx.scoped("rendering shadow maps", || {
-            let tex = texture(ctx, "shadow atlas", layout.width, layout.height, wgpu::TextureFormat::Depth32Float);
+            let tex = texture(
+                ctx,
+                "shadow atlas",
+                layout.width,
+                layout.height,
+                wgpu::TextureFormat::Depth32Float,
+            );
             let view = tex.create_view(&wgpu::TextureViewDescriptor::default());
             let bind = self.faces.write(ctx, &self.face_layout, &faces).clone();
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -677,7 +685,12 @@ impl Pass for ScenePass {
         let shadows_on = settings.shadows && !records.is_empty();
         let layout = if shadows_on {
             let max_side = ctx.device.limits().max_texture_dimension_2d;
-            let layout = ShadowLayout::new(records.len(), settings.shadow_budget_bytes, settings.max_face_px, max_side)?;
+            let layout = ShadowLayout::new(
+                records.len(),
+                settings.shadow_budget_bytes,
+                settings.max_face_px,
+                max_side,
+            )?;
             self.shadow_maps(ctx, &records, layout)?;
             Some(layout)
         } else {

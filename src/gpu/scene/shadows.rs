@@ -97,7 +97,10 @@ impl ShadowLayout {
     /// The top-left pixel of face `face` of luminaire `light`.
     pub fn face_origin(&self, light: usize, face: usize) -> (u32, u32) {
         let tile = (6 * light + face) as u32;
-        ((tile % self.per_row) * self.face_px, (tile / self.per_row) * self.face_px)
+        (
+            (tile % self.per_row) * self.face_px,
+            (tile / self.per_row) * self.face_px,
+        )
     }
 }
 
@@ -150,7 +153,10 @@ mod tests {
             let p = c + 3.0 * fw + 1.2 * r - 0.7 * u;
             let clip = face_clip_from_world(c, f) * p.extend(1.0);
             let ndc = clip.truncate() / clip.w;
-            assert!((ndc.x - 0.4).abs() < 1e-5 && (ndc.y + 0.7 / 3.0).abs() < 1e-5, "{f}: {ndc}");
+            assert!(
+                (ndc.x - 0.4).abs() < 1e-5 && (ndc.y + 0.7 / 3.0).abs() < 1e-5,
+                "{f}: {ndc}"
+            );
             assert!((ndc.z - SHADOW_NEAR_M / 3.0).abs() < 1e-7);
         }
     }
