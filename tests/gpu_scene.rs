@@ -299,6 +299,92 @@ fn two_hundred_fifty_six_luminaires_light_the_plane_within_their_influence() {
     gpu_common::assert_no_validation_messages();
 }
 
+#[test]
+fn the_luminaires_appearance_composites_over_the_lit_room_with_depth() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let scene = scene_of(vec![(floor(20.0), 0.4)]);
+    let bvh = Bvh::build(&scene);
+    let p = gpu_common::bega();
+    // The opening's long side (0.6 m) along the view, so that it covers pixels seen from 18° below.
+    let yaw = if p.opening.size_x_m > p.opening.size_y_m {
+        90.0
+    } else {
+        0.0
+    };
+    let m = placement(0.0, 2.5, 0.0, yaw);
+    r.set_scene(&scene).unwrap();
+    let lum = r.add_photometry(p.clone()).unwrap();
+    r.add_instance(lum, m.as_mat4()).unwrap();
+    let (w, hgt) = (192u32, 128u32);
+    let cam = perspective(
+        Vec3::new(0.0, 1.5, 3.0),
+        Vec3::new(0.0, 1.2, 0.0),
+        60.0,
+        w as f32 / hgt as f32,
+    );
+    let mut t = RenderTarget::new(
+        &r.ctx,
+        &TargetDesc {
+            depth: lumiview::gpu::DepthFormat::R32Float,
+            ..TargetDesc::luminance(w, hgt)
+        },
+    )
+    .unwrap();
+    r.render(&mut t, &cam, &RenderOptions::default()).unwrap();
+    let color = t.read(&r.ctx, lumiview::gpu::Attachment::Color).unwrap();
+    let depth = t.read(&r.ctx, lumiview::gpu::Attachment::Depth).unwrap();
+    let f = |b: &[u8], k: usize| f64::from(f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]));
+    let window_depth = |x: DVec3| {
+        let c = cam.projection.as_dmat4() * cam.view.as_dmat4() * x.extend(1.0);
+        0.5 * c.z / c.w + 0.5
+    };
+    // The opening's centre: the far-field luminance towards the eye, in front of the floor.
+    let clip = cam.clip_from_world().as_dmat4() * DVec3::new(0.0, 2.5, 0.0).extend(1.0);
+    let (i, j) = (
+        ((clip.x / clip.w * 0.5 + 0.5) * f64::from(w)) as usize,
+        ((0.5 - clip.y / clip.w * 0.5) * f64::from(hgt)) as usize,
+    );
+    let k = j * w as usize + i;
+    let to_eye = m
+        .inverse()
+        .transform_vector3(DVec3::new(0.0, 1.5, 3.0) - DVec3::new(0.0, 2.5, 0.0));
+    let (c, g) = lumiview::photometry::web::angles_of(to_eye.to_array());
+    let want = p.luminance(c, g).unwrap();
+    let got = f(&color, 4 * k);
+    assert!((got / want - 1.0).abs() < 0.01, "opening: {got} cd/m² vs {want}");
+    let (o, d) = pixel_ray(&cam, w, hgt, i as u32, j as u32);
+    let t_open = (2.5 - o.y) / d.y;
+    let dz = (f(&depth, k) - window_depth(o + d * t_open)).abs();
+    assert!(dz < 1e-4, "opening depth off by {dz}");
+    // Floor pixels: the lit floor's depth, and its luminance near ρ·I cos³γ/(π h²) (the 0.6 m
+    // opening's near field shifts it by a few per cent at 2.5 m; the plane test above is exact).
+    let mut floor_px = 0;
+    for j in (hgt / 2..hgt).step_by(10) {
+        for i in (0..w).step_by(14) {
+            let Some(pr) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
+                continue;
+            };
+            let k = (j * w + i) as usize;
+            let x = pr.point.position_m;
+            let dz = (f(&depth, k) - window_depth(x)).abs();
+            assert!(dz < 1e-4, "floor pixel ({i}, {j}): depth off by {dz}");
+            let want = 0.4 / std::f64::consts::PI * point_reference_lx(&p, 2.5, yaw, x.x, x.z);
+            let got = f(&color, 4 * k);
+            assert!(
+                got > 0.0 && (got - want).abs() <= 0.05 * want,
+                "floor pixel ({i}, {j}): {got} vs ~{want}"
+            );
+            floor_px += 1;
+        }
+    }
+    eprintln!(
+        "composite: the opening's pixel {got:.0} cd/m² vs L = {want:.0}; {floor_px} floor pixels' depths within 1e-4"
+    );
+    assert!(floor_px >= 10);
+    gpu_common::assert_no_validation_messages();
+}
+
 /// The linear luminaire's visible share along the floor line z = 0 under the plate, as the GPU
 /// shows it (E with the plate / E without) and as the reference computes it, at the floor points
 /// the pixels of an orthographic top view between plate and floor see.
