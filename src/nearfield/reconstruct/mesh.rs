@@ -488,6 +488,55 @@ fn neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
     neighbours
 }
 
+/// `mesh` without its connected components (sharing vertices) of fewer than `min_fraction` of its
+/// triangles, and how many triangles went. Unused vertices are dropped and the rest renumbered in
+/// order.
+pub fn without_small_components(mesh: &Mesh, min_fraction: f64) -> (Mesh, usize) {
+    let n = mesh.vertices.len();
+    let mut parent: Vec<u32> = (0..n as u32).collect();
+    fn root(parent: &mut [u32], mut x: u32) -> u32 {
+        while parent[x as usize] != x {
+            let up = parent[parent[x as usize] as usize];
+            parent[x as usize] = up;
+            x = up;
+        }
+        x
+    }
+    for t in &mesh.triangles {
+        for k in 1..3 {
+            let (a, b) = (root(&mut parent, t[0]), root(&mut parent, t[k]));
+            if a != b {
+                parent[a as usize] = b;
+            }
+        }
+    }
+    let mut size = vec![0usize; n];
+    for t in &mesh.triangles {
+        size[root(&mut parent, t[0]) as usize] += 1;
+    }
+    let min = (min_fraction * mesh.triangles.len() as f64).ceil() as usize;
+    let kept: Vec<[u32; 3]> = mesh
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| size[root(&mut parent, t[0]) as usize] >= min)
+        .collect();
+    let dropped = mesh.triangles.len() - kept.len();
+    let mut index = vec![u32::MAX; n];
+    let mut out = Mesh::default();
+    for t in &kept {
+        let t = t.map(|v| {
+            if index[v as usize] == u32::MAX {
+                index[v as usize] = out.vertices.len() as u32;
+                out.vertices.push(mesh.vertices[v as usize]);
+            }
+            index[v as usize]
+        });
+        out.triangles.push(t);
+    }
+    (out, dropped)
+}
+
 /// The cells of `occ`'s grid that `mesh` passes through (each triangle sampled every quarter cell),
 /// as an occupancy: to measure how much light a mesh that no longer bounds a volume explains.
 pub fn cells_of(mesh: &Mesh, occ: &Occupancy) -> Occupancy {
@@ -650,5 +699,38 @@ mod tests {
         let t = [DVec3::ZERO, DVec3::X, DVec3::Y];
         assert!((point_triangle_distance(DVec3::new(0.2, 0.2, 3.0), &t) - 3.0).abs() < 1e-12);
         assert!((point_triangle_distance(DVec3::new(-1.0, 0.0, 0.0), &t) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn small_components_go_and_the_rest_keeps_its_shape() {
+        // A 10 × 10 quad grid (200 triangles) and a lone triangle far away.
+        let mut m = Mesh::default();
+        for y in 0..=10 {
+            for x in 0..=10 {
+                m.vertices.push(DVec3::new(f64::from(x), f64::from(y), 0.0));
+            }
+        }
+        for y in 0..10u32 {
+            for x in 0..10u32 {
+                let v = y * 11 + x;
+                m.triangles.push([v, v + 1, v + 12]);
+                m.triangles.push([v, v + 12, v + 11]);
+            }
+        }
+        let lone = m.vertices.len() as u32;
+        m.vertices.extend([
+            DVec3::new(50.0, 0.0, 0.0),
+            DVec3::new(51.0, 0.0, 0.0),
+            DVec3::new(50.0, 1.0, 0.0),
+        ]);
+        m.triangles.push([lone, lone + 1, lone + 2]);
+        let (kept, dropped) = without_small_components(&m, 0.01);
+        assert_eq!(dropped, 1);
+        assert_eq!(kept.triangles.len(), 200);
+        assert_eq!(kept.vertices.len(), 121);
+        assert!((kept.area() - 100.0).abs() < 1e-9);
+        // Nothing below the fraction: the mesh is unchanged.
+        let (same, none) = without_small_components(&m, 0.0);
+        assert_eq!((same.triangles.len(), none), (201, 0));
     }
 }

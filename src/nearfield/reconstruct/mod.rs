@@ -162,6 +162,9 @@ pub struct ReconstructReport {
     /// [`Self::coverage`] of the collapsed mesh itself (cells it passes through, grown by one), or
     /// of the carved volume when nothing was collapsed.
     pub collapsed_coverage: f64,
+    /// Triangles of small disconnected parts dropped (fewer than [`STRAY_FRACTION`] of the
+    /// mesh's each, explaining no light the rest does not).
+    pub stray_triangles: usize,
     /// Whether the directional rule's carving was kept (the one-sided rule's explained too little).
     pub directional: bool,
     /// Seconds reading images and building masks, carving, meshing.
@@ -215,6 +218,15 @@ pub const DIRECTIONAL_THIN_FRACTION: f64 = 1.0;
 /// Most coverage (fraction of the lit pixels) the thin-part collapse may lose against the carved
 /// volume's before it is undone.
 pub const COLLAPSE_COVERAGE_LOSS: f64 = 0.02;
+
+/// Connected parts of the mesh with fewer than this fraction of its triangles are dropped when
+/// that loses at most [`STRAY_COVERAGE_LOSS`] of the light: carving leaves slivers of space that
+/// only cameras at the layout's grazing ring could have carved (star-panel: wires 21 mm in front of
+/// the panel, 22–72 vertices each), and a surface proxy draws them in front of the light.
+pub const STRAY_FRACTION: f64 = 0.01;
+
+/// Most coverage (fraction of the lit pixels) dropping the stray parts may lose.
+pub const STRAY_COVERAGE_LOSS: f64 = 0.002;
 
 /// Least [`ReconstructReport::coverage`] of a proxy [`scan_proxy`] keeps: a mesh that misses more
 /// of the light would hide it (a surface proxy shows light only where it is).
@@ -378,6 +390,7 @@ pub fn reconstruct(
         coverage,
         collapsed_vertices,
         collapsed_coverage,
+        stray_triangles,
     } = best;
     let report = ReconstructReport {
         cameras_read: chosen.len(),
@@ -392,6 +405,7 @@ pub fn reconstruct(
         coverage,
         collapsed_vertices,
         collapsed_coverage,
+        stray_triangles,
         directional: rule == carve::Rule::Directional,
         seconds: [(t1 - t0).as_secs_f64(), carve_s, mesh_s],
     };
@@ -410,6 +424,7 @@ struct Attempt {
     coverage: f64,
     collapsed_vertices: usize,
     collapsed_coverage: f64,
+    stray_triangles: usize,
 }
 
 impl Attempt {
@@ -433,6 +448,16 @@ impl Attempt {
                 }
             }
         }
+        let (kept, stray_triangles) = mesh::without_small_components(&mesh, STRAY_FRACTION);
+        let stray_triangles = if stray_triangles > 0
+            && coverage(views, &mesh::cells_of(&kept, &occupancy))
+                >= coverage(views, &mesh::cells_of(&mesh, &occupancy)) - STRAY_COVERAGE_LOSS
+        {
+            mesh = kept;
+            stray_triangles
+        } else {
+            0
+        };
         Self {
             occupancy,
             coverage: if mesh.triangles.is_empty() { 0.0 } else { carved },
@@ -440,6 +465,7 @@ impl Attempt {
             rule,
             collapsed_vertices,
             collapsed_coverage,
+            stray_triangles,
         }
     }
 }

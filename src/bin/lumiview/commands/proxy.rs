@@ -146,6 +146,7 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "coverage": r.coverage,
         "collapsed_vertices": r.collapsed_vertices,
         "collapsed_coverage": r.collapsed_coverage,
+        "stray_triangles": r.stray_triangles,
         "directional": r.directional,
         "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2]},
     })
