@@ -279,8 +279,10 @@ fn two_hundred_fifty_six_luminaires_light_the_plane_within_their_influence() {
                 .filter(|((lx, lz, _), _)| (x - DVec3::new(*lx, 2.5, *lz)).length() > radius)
                 .map(|(_, e)| *e)
                 .sum();
+            // 0.5 %, the open plane's limit: lavapipe lands within 1e-6 of the in-reach sum, an H100
+            // (f32 transcendentals, 256 terms) 0.10 % below it.
             assert!(
-                got <= all * 1.001 && got >= (all - beyond) * 0.999,
+                got <= all * 1.005 && got >= (all - beyond) * 0.995,
                 "pixel ({i}, {j}) at {x}: {got} lx; all luminaires {all} lx, those in reach {}",
                 all - beyond
             );
