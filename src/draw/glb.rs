@@ -86,6 +86,33 @@ impl Buffer {
     }
 }
 
+/// Checks a GLB file's 12-byte header (magic, version 2, a length of at least one chunk header
+/// that the bytes hold) before the `gltf` crate reads it: its parser subtracts before it checks.
+/// Text that is not GLB (a .gltf's JSON) passes unchanged.
+pub fn check_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(format!("truncated GLB header: {} bytes", bytes.len()));
+    };
+    if version != 2 {
+        return Err(format!("GLB version {version}; only glTF 2.0 is supported"));
+    }
+    if (length as usize) < 20 || length as usize > bytes.len() {
+        return Err(format!(
+            "truncated GLB: its header says {length} bytes, the file has {}",
+            bytes.len()
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -58,6 +58,8 @@ pub fn load_gltf(path: &Path) -> Result<Vec<[f32; 3]>> {
     let bytes =
         crate::files::read_regular(path, MAX_GLTF_BYTES, "a glTF proxy").map_err(|e| NearfieldError::io(path, e))?;
     let bad = |m: String| NearfieldError::format(path, m);
+    // gltf's own GLB parser underflows on a header length below 12: checked first.
+    crate::draw::glb::check_header(&bytes).map_err(bad)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| bad(format!("not a glTF 2.0 file: {e}")))?;
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for b in gltf.buffers() {

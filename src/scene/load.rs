@@ -38,6 +38,9 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// Most bytes all buffers together may hold (2 GiB).
 pub const MAX_TOTAL_BUFFER_BYTES: u64 = 2 << 30;
 
+/// Most texels all of a scene's decoded images may hold together (3 bytes each: 768 MiB).
+pub const MAX_SCENE_TEXELS: u64 = 1 << 28;
+
 /// Loads the glTF scene at `path` ([`load_from_slice`] with the file's folder for its relative
 /// URIs).
 ///
@@ -60,13 +63,14 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// triangles, a node hierarchy that is not a forest, no triangles.
 pub fn load_from_slice(bytes: &[u8], path: &Path, base_dir: Option<&Path>) -> Result<Scene> {
     let bad = |m: String| SceneError::format(path, m);
-    check_glb_header(bytes).map_err(bad)?;
+    crate::draw::glb::check_header(bytes).map_err(bad)?;
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| bad(format!("not a glTF 2.0 file: {e}")))?;
     let mut loader = Loader {
         path,
         base_dir,
         buffers: Vec::new(),
         warnings: Vec::new(),
+        texels: 0,
     };
     loader.read_buffers(&gltf)?;
     let (mut materials, images) = loader.read_materials(&gltf)?;
@@ -152,37 +156,13 @@ pub fn load_from_slice(bytes: &[u8], path: &Path, base_dir: Option<&Path>) -> Re
     Scene::new(parts).map_err(|e| bad(e.to_string()))
 }
 
-/// Checks a GLB file's 12-byte header and the first chunk header against the bytes there are (the
-/// `gltf` crate subtracts before it checks). Text that is not GLB passes unchanged.
-fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
-    if !bytes.starts_with(b"glTF") {
-        return Ok(());
-    }
-    let word = |at: usize| {
-        bytes
-            .get(at..at + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-    };
-    let (Some(version), Some(length)) = (word(4), word(8)) else {
-        return Err(format!("truncated GLB header: {} bytes", bytes.len()));
-    };
-    if version != 2 {
-        return Err(format!("GLB version {version}; only glTF 2.0 is supported"));
-    }
-    if (length as usize) < 20 || length as usize > bytes.len() {
-        return Err(format!(
-            "truncated GLB: its header says {length} bytes, the file has {}",
-            bytes.len()
-        ));
-    }
-    Ok(())
-}
-
 struct Loader<'p> {
     path: &'p Path,
     base_dir: Option<&'p Path>,
     buffers: Vec<Vec<u8>>,
     warnings: Vec<String>,
+    /// Texels of the images decoded so far (against [`MAX_SCENE_TEXELS`]).
+    texels: u64,
 }
 
 /// An accessor's bytes and layout, checked: element `i`'s component `k` lies within `bytes`.
@@ -373,9 +353,10 @@ impl Loader<'_> {
             if let Some(info) = pbr.base_color_texture() {
                 let tex = info.texture();
                 let img = tex.source();
-                let image = match decoded.get(img.index()).copied().flatten() {
-                    Some(known) => known,
-                    None => {
+                // Decoded once per image, a failure (a JPEG) included.
+                let image = match decoded.get(img.index()).copied() {
+                    Some(Some(known)) => known,
+                    _ => {
                         let idx = match self.decode_image(&img, &what)? {
                             Some(image) => {
                                 images.push(image);
@@ -422,9 +403,14 @@ impl Loader<'_> {
             },
         };
         if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-            return Image::decode_png(&bytes)
-                .map(Some)
-                .map_err(|e| self.bad(format!("{what}: {e}")));
+            let image = Image::decode_png(&bytes).map_err(|e| self.bad(format!("{what}: {e}")))?;
+            self.texels += u64::from(image.width()) * u64::from(image.height());
+            if self.texels > MAX_SCENE_TEXELS {
+                return Err(self.bad(format!(
+                    "{what}: the scene's images hold more than {MAX_SCENE_TEXELS} texels together"
+                )));
+            }
+            return Ok(Some(image));
         }
         let kind = if bytes.starts_with(&[0xFF, 0xD8, 0xFF]) {
             "a JPEG image"
@@ -505,6 +491,19 @@ impl Loader<'_> {
                 )
             }
         };
+        // The triangles this primitive makes, checked against the limit before anything of its
+        // size is allocated (a buffer of zero indices passes the range check).
+        let count_triangles = |n: usize| match mode {
+            Mode::TriangleStrip | Mode::TriangleFan => n.saturating_sub(2),
+            _ => n / 3,
+        };
+        let index_count = match prim.indices() {
+            Some(ref acc) => acc.count(),
+            None => positions.len(),
+        };
+        if count_triangles(index_count) > MAX_TRIANGLES.saturating_sub(parts.triangles.len()) {
+            return Err(self.bad(format!("{what}: more than {MAX_TRIANGLES} triangles; unsupported")));
+        }
         let indices: Vec<u32> = match prim.indices() {
             Some(acc) => {
                 let ix = self.accessor(&acc, what)?;
@@ -663,14 +662,18 @@ mod tests {
 
     #[test]
     fn glb_headers_are_checked_before_gltf_reads_them() {
-        assert!(check_glb_header(b"{\"asset\":{}}").is_ok(), "JSON passes");
-        assert!(check_glb_header(b"glTF\x02\0\0\0").unwrap_err().contains("truncated"));
+        assert!(crate::draw::glb::check_header(b"{\"asset\":{}}").is_ok(), "JSON passes");
+        assert!(crate::draw::glb::check_header(b"glTF\x02\0\0\0")
+            .unwrap_err()
+            .contains("truncated"));
         let mut h = b"glTF\x02\0\0\0\x05\0\0\0".to_vec();
         h.resize(40, 0);
-        assert!(check_glb_header(&h).unwrap_err().contains("says 5 bytes"));
+        assert!(crate::draw::glb::check_header(&h).unwrap_err().contains("says 5 bytes"));
         h[8] = 200;
-        assert!(check_glb_header(&h).unwrap_err().contains("says 200 bytes"));
+        assert!(crate::draw::glb::check_header(&h)
+            .unwrap_err()
+            .contains("says 200 bytes"));
         h[4] = 1;
-        assert!(check_glb_header(&h).unwrap_err().contains("version 1"));
+        assert!(crate::draw::glb::check_header(&h).unwrap_err().contains("version 1"));
     }
 }

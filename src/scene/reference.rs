@@ -45,6 +45,12 @@ pub struct SurfacePoint {
     pub normal: DVec3,
 }
 
+/// Most area samples per luminaire a [`TraceOptions`] may ask for.
+pub const MAX_AREA_SAMPLES: usize = 1 << 20;
+
+/// Most bounces a [`TraceOptions`] may ask for (a closed white room never ends a path by itself).
+pub const MAX_BOUNCES: usize = 1024;
+
 /// How much work the estimates get.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TraceOptions {
@@ -136,6 +142,15 @@ impl<'s> Tracer<'s> {
             return Err(SceneError::invalid(
                 "options",
                 "direct_estimates and area_samples must be at least 1",
+            ));
+        }
+        if opts.area_samples > MAX_AREA_SAMPLES || opts.max_bounces > MAX_BOUNCES {
+            return Err(SceneError::invalid(
+                "options",
+                format!(
+                    "area_samples {} (at most {MAX_AREA_SAMPLES}) or max_bounces {} (at most {MAX_BOUNCES}) too large",
+                    opts.area_samples, opts.max_bounces
+                ),
             ));
         }
         let mut unit = Vec::with_capacity(points.len());

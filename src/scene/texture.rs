@@ -145,8 +145,11 @@ impl Image {
     /// The linear RGB value (0…1 per channel) at texture coordinates (`u`, `v`) under `texture`'s
     /// wrapping and filter. Non-finite coordinates read the top-left texel.
     pub fn sample_linear(&self, u: f64, v: f64, texture: &TextureRef) -> [f64; 3] {
+        // Far outside [0, 1] only the wrap matters; clamped so that texel indices stay far from
+        // i64's range (a UV of 3e38 would overflow `x0 + 1`).
+        const FAR: f64 = (1u64 << 40) as f64;
         let (u, v) = if u.is_finite() && v.is_finite() {
-            (u, v)
+            (u.clamp(-FAR, FAR), v.clamp(-FAR, FAR))
         } else {
             (0.0, 0.0)
         };

@@ -25,7 +25,9 @@
 //! - Memory: the vertex buffer (36 bytes a vertex, three per triangle) must fit the device's
 //!   largest buffer; the shadow atlas stays within [`SceneSettings::shadow_budget_bytes`]; the
 //!   intensity atlas holds up to [`lights::MAX_INTENSITY_TABLES`] photometries (1 MiB each); the
-//!   tile lists and luminaire records are storage buffers far below lavapipe's 128 MiB a binding.
+//!   tile lists and luminaire records are storage buffers, not yet checked against a device's
+//!   binding limit (lavapipe: 128 MiB; every luminaire in every tile exceeds it near a thousand
+//!   luminaires at 4K).
 
 pub mod lights;
 pub mod shadows;
@@ -87,10 +89,14 @@ impl SceneSettings {
         if self.shadow_budget_bytes == 0 {
             return Err(GpuError::invalid(Arg::BudgetBytes, "the shadow budget must be > 0"));
         }
-        if self.max_face_px < MIN_FACE_PX {
+        if !(MIN_FACE_PX..=shadows::MAX_ATLAS_SIDE).contains(&self.max_face_px) {
             return Err(GpuError::invalid(
                 Arg::FacePx,
-                format!("{} must be at least {MIN_FACE_PX}", self.max_face_px),
+                format!(
+                    "{} must be at least {MIN_FACE_PX} and at most {}",
+                    self.max_face_px,
+                    shadows::MAX_ATLAS_SIDE
+                ),
             ));
         }
         Ok(())
@@ -187,7 +193,8 @@ struct SceneMesh {
 /// The intensity tables of the photometries of the last frame.
 #[derive(Debug)]
 struct IntensityAtlas {
-    photometries: Vec<usize>,
+    /// Held, so that an address is never reused for another photometry while it is compared.
+    photometries: Vec<Arc<crate::photometry::Photometry>>,
     view: wgpu::TextureView,
     per_row: u32,
     max_cd: Vec<f32>,
@@ -435,6 +442,7 @@ impl ScenePass {
     pub fn clear_scene(&mut self) {
         self.mesh = None;
         self.shadows = None;
+        self.tables = None;
     }
 
     /// Whether a scene is loaded.
@@ -461,14 +469,16 @@ impl ScenePass {
         ctx: &GpuContext,
         instances: &[(Arc<FarfieldLuminaire>, Mat4)],
     ) -> Result<Vec<u32>, GpuError> {
-        let mut distinct: Vec<usize> = Vec::new();
+        let mut distinct: Vec<Arc<crate::photometry::Photometry>> = Vec::new();
         let mut index = Vec::with_capacity(instances.len());
         for (lum, _) in instances {
-            let key = Arc::as_ptr(&lum.photometry) as usize;
-            let i = distinct.iter().position(|k| *k == key).unwrap_or_else(|| {
-                distinct.push(key);
-                distinct.len() - 1
-            });
+            let i = distinct
+                .iter()
+                .position(|p| Arc::ptr_eq(p, &lum.photometry))
+                .unwrap_or_else(|| {
+                    distinct.push(lum.photometry.clone());
+                    distinct.len() - 1
+                });
             index.push(i as u32);
         }
         if distinct.len() > MAX_INTENSITY_TABLES {
@@ -480,7 +490,10 @@ impl ScenePass {
                 ),
             ));
         }
-        if self.tables.as_ref().is_some_and(|t| t.photometries == distinct) {
+        if self.tables.as_ref().is_some_and(|t| {
+            t.photometries.len() == distinct.len()
+                && t.photometries.iter().zip(&distinct).all(|(a, b)| Arc::ptr_eq(a, b))
+        }) {
             return Ok(index);
         }
         let per_row = (distinct.len() as u32).clamp(1, MAX_TABLES_PER_ROW);
@@ -489,14 +502,8 @@ impl ScenePass {
         let mut max_cd = vec![0.0f32; distinct.len()];
         let view = ctx.scoped("uploading intensity tables", || {
             let tex = texture(ctx, "intensity tables (cd)", w, h, wgpu::TextureFormat::R32Float);
-            for (t, key) in distinct.iter().enumerate() {
-                let Some((lum, _)) = instances
-                    .iter()
-                    .find(|(l, _)| Arc::as_ptr(&l.photometry) as usize == *key)
-                else {
-                    continue;
-                };
-                let table = lights::intensity_table(&lum.photometry);
+            for (t, photometry) in distinct.iter().enumerate() {
+                let table = lights::intensity_table(photometry);
                 max_cd[t] = table.iter().copied().fold(0.0, f32::max);
                 let (col, row) = (t as u32 % per_row, t as u32 / per_row);
                 ctx.queue.write_texture(
