@@ -218,6 +218,77 @@ fn a_luminaire_over_an_open_plane_gives_i_cos3_over_h2() {
     gpu_common::assert_no_validation_messages();
 }
 
+/// A low box on the floor shadows the strip just behind it: the blocker lies within a few per cent
+/// of the receiver's distance to the luminaire (found in review: the blocker search looked no
+/// nearer than a quarter of the way and drew that strip lit). Visibility from the CPU BVH.
+#[test]
+fn a_low_box_shadows_the_floor_right_behind_it() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let rho = 0.5;
+    let low_box = lumiview::scene::sample::box_triangles(DVec3::new(0.9, 0.0, -1.0), DVec3::new(1.0, 0.1, 1.0), false);
+    let scene = scene_of(vec![(floor(20.0), rho), (low_box, rho)]);
+    let bvh = Bvh::build(&scene);
+    let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    let (h, yaw) = (2.5, 0.0);
+    let light = DVec3::new(0.0, h, 0.0);
+    let (w, hgt) = (96u32, 64u32);
+    // From beyond the box, looking down at the 4 cm strip its top edge shadows (x 1.0 … 1.042 m).
+    let cam = perspective(
+        Vec3::new(1.5, 0.6, 0.0),
+        Vec3::new(1.03, 0.0, 0.0),
+        12.0,
+        w as f32 / hgt as f32,
+    );
+    let lum = render_luminance(
+        &mut r,
+        &scene,
+        &[(p.clone(), placement(0.0, h, 0.0, yaw))],
+        &cam,
+        w,
+        hgt,
+    );
+    let (mut shadowed, mut lit, mut worst_lit) = (0, 0, 0.0f64);
+    for j in 0..hgt {
+        for i in 0..w {
+            let Some(pr) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
+                continue;
+            };
+            let x = pr.point.position_m;
+            if pr.point.normal.y < 0.99 || x.y.abs() > 1e-9 || x.z.abs() > 0.5 {
+                continue;
+            }
+            let to = light - x;
+            let full = point_reference_lx(&p, h, yaw, x.x, x.z);
+            let got = std::f64::consts::PI * lum[(j * w + i) as usize] / pr.rho_y;
+            // Keep clear of the shadow's edge by a pixel's footprint (about 2 mm here).
+            let near_edge = |q: DVec3| bvh.occluded(q + DVec3::Y * 1e-6, light - q, 1.0);
+            let hidden = near_edge(x);
+            let firm = [-0.004, 0.004].iter().all(|dx| near_edge(x + DVec3::X * *dx) == hidden);
+            if !firm {
+                continue;
+            }
+            if hidden {
+                shadowed += 1;
+                assert!(
+                    got < 0.01 * full,
+                    "pixel ({i}, {j}) at {x} behind the box: {got} lx of {full} unshadowed"
+                );
+            } else if to.length() > 0.0 {
+                lit += 1;
+                worst_lit = worst_lit.max((got - full).abs() / full);
+                assert!(
+                    (got - full).abs() < 0.005 * full,
+                    "pixel ({i}, {j}) at {x} in the open: {got} lx vs {full} lx"
+                );
+            }
+        }
+    }
+    eprintln!("low box: {shadowed} floor probes in its shadow (all dark), {lit} lit (worst {worst_lit:.1e})");
+    assert!(shadowed >= 20 && lit >= 20, "{shadowed} shadowed, {lit} lit probes");
+    gpu_common::assert_no_validation_messages();
+}
+
 #[test]
 fn two_hundred_fifty_six_luminaires_light_the_plane_within_their_influence() {
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
@@ -627,8 +698,11 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
             }
             assert!(
                 err <= 0.03 * want + 1e-3,
-                "pixel {:?} at {x:.3}: GPU {got} lx vs reference {want} lx",
-                p.px
+                "pixel {:?} at {x:.3} (normal {n}, triangle {}, material {}), luminaires seen {shares:?}: GPU {got} lx vs \
+                 reference {want} lx",
+                p.px,
+                p.triangle,
+                scene.material_of()[p.triangle]
             );
             if err > 0.01 * want + 1e-3 {
                 failures.push(format!(
