@@ -720,14 +720,16 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
     pen_err.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
     let median_pen = pen_err.get(pen_err.len() / 2).copied().unwrap_or(0.0);
     let worst_pen = pen_err.last().copied().unwrap_or(0.0);
+    let p75_pen = pen_err.get(pen_err.len() * 3 / 4).copied().unwrap_or(0.0);
     eprintln!(
         "office, 6 × linear 1.2 m luminaires: {} probes; fully lit or shadowed {clear} (all six seen {all_lit}, some hidden \
          {some_hidden}, all hidden {all_hidden}): worst {:.2} % (reference standard error ≤ {:.2} %); penumbra {penumbra}: \
-         median |error| {:.1} %, worst {:.1} %",
+         median |error| {:.1} %, 75th percentile {:.1} %, worst {:.1} %",
         probes.len(),
         100.0 * worst_clear,
         100.0 * max_se,
         100.0 * median_pen.abs(),
+        100.0 * p75_pen.abs(),
         100.0 * worst_pen.abs()
     );
     // Known: a receiver in a crevice (the 10 cm gap between the cabinet's back and the wall) can
@@ -742,6 +744,13 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
         failures.len() * 100 <= clear,
         "{} of {clear} clear probes off by more than 1 %",
         failures.len()
+    );
+    // Penumbra probes (a luminaire partly hidden): measured median |error| 0.4 %, 75th percentile
+    // 2.2 %, worst 72 % (where the blocker depth of PCSS is a mean over blockers at different
+    // depths); held at twice the measured median and 75th percentile.
+    assert!(
+        median_pen.abs() <= 0.008 && p75_pen.abs() <= 0.045,
+        "penumbra: median |error| {median_pen}, 75th percentile {p75_pen}"
     );
     assert!(clear + penumbra >= 50 && clear >= 30 && penumbra >= 5, "probe counts");
     assert!(all_lit > 0 && some_hidden > 0, "both kinds of clear probes");

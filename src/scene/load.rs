@@ -38,6 +38,10 @@ pub const MAX_SCENE_BYTES: u64 = 1 << 30;
 /// Most bytes all buffers together may hold (2 GiB).
 pub const MAX_TOTAL_BUFFER_BYTES: u64 = 2 << 30;
 
+/// Most vertices all of a scene's nodes may read together, each instance of a mesh counted (four
+/// times the vertices of the largest scene's triangles).
+pub const MAX_VERTICES_READ: u64 = 4 * 3 * MAX_TRIANGLES as u64;
+
 /// Most texels all of a scene's decoded images may hold together (3 bytes each: 768 MiB).
 pub const MAX_SCENE_TEXELS: u64 = 1 << 28;
 
@@ -71,6 +75,7 @@ pub fn load_from_slice(bytes: &[u8], path: &Path, base_dir: Option<&Path>) -> Re
         buffers: Vec::new(),
         warnings: Vec::new(),
         texels: 0,
+        vertices_read: std::cell::Cell::new(0),
     };
     loader.read_buffers(&gltf)?;
     let (mut materials, images) = loader.read_materials(&gltf)?;
@@ -163,6 +168,8 @@ struct Loader<'p> {
     warnings: Vec<String>,
     /// Texels of the images decoded so far (against [`MAX_SCENE_TEXELS`]).
     texels: u64,
+    /// Vertices read so far, every instance of a mesh counted (against [`MAX_VERTICES_READ`]).
+    vertices_read: std::cell::Cell<u64>,
 }
 
 /// An accessor's bytes and layout, checked: element `i`'s component `k` lies within `bytes`.
@@ -454,6 +461,15 @@ impl Loader<'_> {
                 3 * MAX_TRIANGLES
             )));
         }
+        // A mesh is read again for every node that uses it: the reads of all of them are bounded
+        // (100,000 nodes of one 24 M-vertex mesh would otherwise take hours).
+        let read = self.vertices_read.get() + pos.count as u64;
+        if read > MAX_VERTICES_READ {
+            return Err(self.bad(format!(
+                "{what}: the scene's nodes read more than {MAX_VERTICES_READ} vertices together"
+            )));
+        }
+        self.vertices_read.set(read);
         let mut positions: Vec<DVec3> =
             crate::files::try_vec(pos.count, "positions").map_err(|e| self.bad(format!("{what}: {e}")))?;
         for i in 0..pos.count {

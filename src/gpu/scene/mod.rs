@@ -25,9 +25,9 @@
 //! - Memory: the vertex buffer (36 bytes a vertex, three per triangle) must fit the device's
 //!   largest buffer; the shadow atlas stays within [`SceneSettings::shadow_budget_bytes`]; the
 //!   intensity atlas holds up to [`lights::MAX_INTENSITY_TABLES`] photometries (1 MiB each); the
-//!   tile lists and luminaire records are storage buffers, not yet checked against a device's
-//!   binding limit (lavapipe: 128 MiB; every luminaire in every tile exceeds it near a thousand
-//!   luminaires at 4K).
+//!   tile lists and luminaire records are storage buffers; lists larger than the device's binding
+//!   limit (lavapipe: 128 MiB; every luminaire in every tile reaches it near a thousand luminaires
+//!   at 4K) are an error that names the lux floor.
 
 pub mod lights;
 pub mod shadows;
@@ -706,6 +706,22 @@ impl Pass for ScenePass {
         let target = view.target();
         let clip_from_world = view.clip_from_world();
         let (tiles_x, tiles_y, lists) = lights::tile_lists(clip_from_world, target.width, target.height, &records);
+        let max_binding = ctx.device.limits().max_storage_buffer_binding_size;
+        if 4 * lists.len() as u64 > max_binding {
+            return Err(GpuError::invalid(
+                Arg::Luminaire,
+                format!(
+                    "the per-tile light lists of {} luminaires at {}×{} take {} bytes, more than the device's {} \
+                     a binding: raise the lux floor (SceneSettings::lux_floor_lx, now {} lx) or use fewer luminaires",
+                    records.len(),
+                    target.width,
+                    target.height,
+                    4 * lists.len(),
+                    max_binding,
+                    settings.lux_floor_lx
+                ),
+            ));
+        }
         let options = view.options();
         let uniform = SceneFrameUniform {
             clip_from_world: clip_from_world.to_cols_array_2d(),
