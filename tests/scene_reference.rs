@@ -869,6 +869,16 @@ fn hostile_gltf_files_are_errors_not_panics() {
     let e = load_err(&glb(&doc, buf), "huge.glb");
     assert!(e.contains("node 8: its transform is not finite"), "{e}");
 
+    // One mesh of a million vertices used by 100 nodes: 10⁸ vertex reads, over the budget
+    // (MAX_VERTICES_READ), refused before the reads take minutes.
+    let mut many = vec![[0.0f32; 3]; 1_000_000];
+    many[..3].copy_from_slice(&TRI);
+    let (mut doc, buf) = triangle_gltf(&many, &[0, 1, 2]);
+    doc["scenes"] = json!([{"nodes": (0..100).collect::<Vec<u32>>()}]);
+    doc["nodes"] = json!((0..100).map(|_| json!({"mesh": 0})).collect::<Vec<_>>());
+    let e = load_err(&glb(&doc, buf), "instances.glb");
+    assert!(e.contains("vertices together"), "{e}");
+
     let (mut doc, buf) = triangle_gltf(&TRI, &[0, 1, 2]);
     doc["buffers"][0]["byteLength"] = json!(buf.len() + 100);
     let e = load_err(&glb(&doc, buf), "short.glb");

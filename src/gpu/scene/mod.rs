@@ -496,7 +496,23 @@ impl ScenePass {
         }) {
             return Ok(index);
         }
-        let per_row = (distinct.len() as u32).clamp(1, MAX_TABLES_PER_ROW);
+        // As many tables a row and rows as the device's largest 2D texture holds (8192 on
+        // lavapipe; 2048 on the smallest devices wgpu supports: 2 × 5 tables).
+        let max_side = ctx.device.limits().max_texture_dimension_2d;
+        let fit_row = (max_side / INTENSITY_TABLE_W).min(MAX_TABLES_PER_ROW);
+        let fit_rows = max_side / INTENSITY_TABLE_H;
+        if distinct.len() as u64 > u64::from(fit_row) * u64::from(fit_rows) {
+            return Err(GpuError::invalid(
+                Arg::Luminaire,
+                format!(
+                    "the scene is lit by {} distinct photometries; this device's {max_side}-texel textures hold {} \
+                     intensity tables",
+                    distinct.len(),
+                    fit_row * fit_rows
+                ),
+            ));
+        }
+        let per_row = (distinct.len() as u32).clamp(1, fit_row);
         let rows = (distinct.len() as u32).div_ceil(per_row).max(1);
         let (w, h) = (per_row * INTENSITY_TABLE_W, rows * INTENSITY_TABLE_H);
         let mut max_cd = vec![0.0f32; distinct.len()];
