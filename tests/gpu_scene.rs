@@ -9,19 +9,23 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod scene_common;
+
 mod gpu_common;
 
 use std::path::Path;
 use std::sync::Arc;
 
+use scene_common::{floor, photometry_text, scene_of};
+
 use glam::{DMat4, DVec3, Vec3};
 use gpu_common::{renderer, GPU_LOCK};
 use lumiview::gpu::{HostCamera, RenderOptions, RenderTarget, Renderer, TargetDesc};
-use lumiview::photometry::{load_from_text, LoadOptions, Photometry};
+use lumiview::photometry::Photometry;
 use lumiview::scene::bvh::Bvh;
 use lumiview::scene::model::luminance_y;
 use lumiview::scene::sample::OFFICE_LUMINAIRES;
-use lumiview::scene::{placement, Material, Scene, SceneLuminaire, SceneParts, SurfacePoint, TraceOptions, Tracer};
+use lumiview::scene::{placement, Scene, SceneLuminaire, SurfacePoint, TraceOptions, Tracer};
 
 /// A synthetic point luminaire with no symmetry: five C planes (0–360°), γ 0–90°.
 const ASYMMETRIC_IES: &str = "IESNA:LM-63-2002\n[TEST] asymmetric point source\nTILT=NONE\n\
@@ -32,27 +36,6 @@ const ASYMMETRIC_IES: &str = "IESNA:LM-63-2002\n[TEST] asymmetric point source\n
 /// cos γ below.
 const LINEAR_IES: &str = "IESNA:LM-63-2002\n[TEST] linear 1.2 m\nTILT=NONE\n\
 1 -1 1 5 1 1 2 0.1 1.2 0\n1 1 30\n0 22.5 45 67.5 90\n0\n1000 923.8795 707.1068 382.6834 0\n";
-
-fn photometry_text(text: &str, name: &str) -> Arc<Photometry> {
-    Arc::new(load_from_text(text, name, &LoadOptions::default()).unwrap())
-}
-
-fn scene_of(parts: Vec<(Vec<[DVec3; 3]>, f64)>) -> Scene {
-    let mut p = SceneParts::default();
-    for (m, (tris, rho)) in parts.into_iter().enumerate() {
-        p.material_of.extend(std::iter::repeat_n(m as u32, tris.len()));
-        p.triangles.extend(tris);
-        p.materials.push(Material::grey(rho));
-    }
-    Scene::new(p).unwrap()
-}
-
-/// The floor y = 0 over ±`half` m.
-fn floor(half: f64) -> Vec<[DVec3; 3]> {
-    let c = |x: f64, z: f64| DVec3::new(x, 0.0, z);
-    let (a, b, cc, d) = (c(-half, half), c(half, half), c(half, -half), c(-half, -half));
-    vec![[a, b, cc], [a, cc, d]]
-}
 
 /// The half-plane x ≥ 0 at height `h` (over |z| ≤ 5 m, x ≤ 5 m).
 fn plate(h: f64) -> Vec<[DVec3; 3]> {

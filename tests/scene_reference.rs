@@ -8,19 +8,21 @@
 //! Measured figures are printed (`--nocapture`) and quoted in docs/scene-lighting.md.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod scene_common;
+
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use scene_common::{floor, photometry_text, scene_of};
+
 use glam::DVec3;
 use lumiview::draw::glb::{Buffer, ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER};
 use lumiview::photometry::isolux::illuminance_lx;
-use lumiview::photometry::{load, load_from_text, LoadOptions, LuminousOpening, Photometry};
+use lumiview::photometry::{load, LoadOptions, LuminousOpening, Photometry};
 use lumiview::scene::grid::{grid_csv, work_plane_grid, FloorRect};
 use lumiview::scene::sample::{self, box_triangles, sphere_triangles, OFFICE_BOUNDS_M, OFFICE_CHECKER_SRGB};
-use lumiview::scene::{
-    placement, Material, PerBounce, Scene, SceneLuminaire, SceneParts, SurfacePoint, TraceOptions, Tracer,
-};
+use lumiview::scene::{placement, PerBounce, SceneLuminaire, SurfacePoint, TraceOptions, Tracer};
 use serde_json::json;
 
 const BEGA: &str = "tests/data/misc/arnold-usd_bega_50804K3.ies";
@@ -42,27 +44,6 @@ const LINEAR_IES: &str = "IESNA:LM-63-2002\n[TEST] linear 1.2 m\nTILT=NONE\n\
 
 fn repo(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
-}
-
-fn photometry_text(text: &str, name: &str) -> Arc<Photometry> {
-    Arc::new(load_from_text(text, name, &LoadOptions::default()).unwrap())
-}
-
-fn scene_of(parts: Vec<(Vec<[DVec3; 3]>, f64)>) -> Scene {
-    let mut p = SceneParts::default();
-    for (m, (tris, rho)) in parts.into_iter().enumerate() {
-        p.material_of.extend(std::iter::repeat_n(m as u32, tris.len()));
-        p.triangles.extend(tris);
-        p.materials.push(Material::grey(rho));
-    }
-    Scene::new(p).unwrap()
-}
-
-/// The floor y = 0 over ±`half` m, facing up.
-fn floor(half: f64) -> Vec<[DVec3; 3]> {
-    let c = |x: f64, z: f64| DVec3::new(x, 0.0, z);
-    let (a, b, cc, d) = (c(-half, half), c(half, half), c(half, -half), c(-half, -half));
-    vec![[a, b, cc], [a, cc, d]]
 }
 
 fn up(x: f64, y: f64, z: f64) -> SurfacePoint {

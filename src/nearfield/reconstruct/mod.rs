@@ -449,10 +449,15 @@ impl Attempt {
             }
         }
         let (kept, stray_triangles) = mesh::without_small_components(&mesh, STRAY_FRACTION);
-        let stray_triangles = if stray_triangles > 0
-            && coverage(views, &mesh::cells_of(&kept, &occupancy))
-                >= coverage(views, &mesh::cells_of(&mesh, &occupancy)) - STRAY_COVERAGE_LOSS
-        {
+        // The mesh's own coverage: measured above when the collapse was kept.
+        let stray_triangles = if stray_triangles > 0 && {
+            let before = if collapsed_vertices > 0 {
+                collapsed_coverage
+            } else {
+                coverage(views, &mesh::cells_of(&mesh, &occupancy))
+            };
+            coverage(views, &mesh::cells_of(&kept, &occupancy)) >= before - STRAY_COVERAGE_LOSS
+        } {
             mesh = kept;
             stray_triangles
         } else {
