@@ -278,3 +278,178 @@ fn synth_forward_traces_a_ray_file_that_reads_back() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A point source (no opening) of 1000 cd in every direction, written to a temporary file.
+fn isotropic_point_source(name: &str) -> std::path::PathBuf {
+    let p = std::env::temp_dir().join(format!("lumiview-cli-{}-{name}.ies", std::process::id()));
+    std::fs::write(
+        &p,
+        "IESNA:LM-63-2002\n[TEST] isotropic point\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 90 180\n0\n1000 1000 1000\n",
+    )
+    .unwrap();
+    p
+}
+
+#[test]
+fn scene_grid_is_the_inverse_square_law_where_nothing_is_in_the_way() {
+    // One 1000 cd point source 1.75 m above a work plane at 1.2 m in the sample office, over the
+    // free middle of the room: E = I cos³γ / h², written here, independent of the tracer.
+    let ies = isotropic_point_source("grid");
+    let csv = std::env::temp_dir().join(format!("lumiview-cli-{}-grid.csv", std::process::id()));
+    let lum = format!("{}@0.1,2.95,-0.2,30", ies.display());
+    let out = lumiview(&[
+        "scene",
+        "assets/scenes/office.glb",
+        "--luminaire",
+        &lum,
+        "--grid",
+        "1.2",
+        "--grid-rect",
+        "-1,-1,1,1",
+        "--spacing",
+        "0.25",
+        "--direct-only",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("x_m,y_m,z_m,E_lx"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 64, "8 × 8 cells of 0.25 m");
+    let mut e_all = Vec::new();
+    for r in &rows {
+        let (dx, dz, h) = (r[0] - 0.1, r[2] + 0.2, 2.95 - r[1]);
+        let d2 = dx * dx + dz * dz + h * h;
+        let cos = h / d2.sqrt();
+        let want = 1000.0 * cos * cos * cos / (h * h);
+        assert!((r[3] - want).abs() <= 0.001 + 1e-6 * want, "{r:?}: want {want}");
+        e_all.push(r[3]);
+    }
+    // The printed figures are the grid's.
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    let (min, max) = e_all.iter().fold((f64::MAX, 0.0f64), |(a, b), &e| (a.min(e), b.max(e)));
+    let avg = e_all.iter().sum::<f64>() / e_all.len() as f64;
+    assert!(stdout.contains("8 × 8 points"), "{stdout}");
+    assert!(stdout.contains(&format!("U0 = Emin/Ē {:.3}", min / avg)), "{stdout}");
+    // Three significant digits, as a lighting report gives them.
+    let three = |v: f64| {
+        let decimals = (2 - v.log10().floor() as i32).clamp(0, 6) as usize;
+        let s = format!("{v:.decimals$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
+    };
+    assert!(stdout.contains(&format!("Emax {} lx", three(max))), "{stdout}");
+    assert!(stdout.contains(&format!("Ē {} lx", three(avg))), "{stdout}");
+    assert!(
+        stdout.contains("direct light with visibility (no inter-reflection)"),
+        "{stdout}"
+    );
+    let _ = std::fs::remove_file(&csv);
+    let _ = std::fs::remove_file(&ies);
+}
+
+#[test]
+fn scene_grid_png_with_inter_reflection_is_brighter_and_shadowed_under_the_cabinet() {
+    let ies = isotropic_point_source("png");
+    let png = std::env::temp_dir().join(format!("lumiview-cli-{}-grid.png", std::process::id()));
+    let lum = format!("{}@0,2.5,0", ies.display());
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "scene",
+            "assets/scenes/office.glb",
+            "--luminaire",
+            &lum,
+            "--grid",
+            "0.75",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", png.to_str().unwrap()]);
+        let out = lumiview(&args);
+        assert!(out.status.success(), "{}", stderr_of(&out));
+        String::from_utf8_lossy(&out.stdout).to_string()
+    };
+    let avg = |s: &str| -> f64 {
+        let t = s.split("Ē ").nth(1).unwrap();
+        t.split(' ').next().unwrap().parse().unwrap()
+    };
+    let direct = run(&["--direct-only", "--spacing", "0.5"]);
+    let total = run(&["--paths", "64", "--spacing", "0.5"]);
+    // Walls (0.5), ceiling (0.7) and floor reflect: the room's inter-reflection adds a large part.
+    assert!(avg(&total) > 1.3 * avg(&direct), "{direct}\n{total}");
+    // Inside the closed cabinet nothing arrives: Emin is 0.
+    assert!(total.contains("Emin 0 lx"), "{total}");
+    assert!(total.contains("64 paths per point"), "{total}");
+    let pm = tiny_skia::Pixmap::load_png(&png).unwrap();
+    assert_eq!(pm.width(), 900);
+    let _ = std::fs::remove_file(&png);
+    let _ = std::fs::remove_file(&ies);
+}
+
+#[test]
+fn scene_options_that_do_not_apply_and_bad_placements_are_named() {
+    let ies = ASA;
+    let lum = format!("{ies}@0,2.9,0");
+    let cases: [(&[&str], &str); 6] = [
+        (&["--grid", "0.75", "-o", "/tmp/x.exr"], "must end in .csv or .png"),
+        (&["-o", "/tmp/x.csv"], "a view must end in .png or .exr"),
+        (
+            &["--grid", "0.75", "--camera", "1,1,1", "-o", "/tmp/x.csv"],
+            "--camera applies to a rendered view",
+        ),
+        (
+            &["--spacing", "0.2", "-o", "/tmp/x.png"],
+            "--spacing applies to the illuminance grid",
+        ),
+        (
+            &["--grid", "0.75", "--grid-rect", "1,1,0,0", "-o", "/tmp/x.csv"],
+            "--grid-rect '1,1,0,0'",
+        ),
+        (&["--grid", "0.75", "--spacing", "0", "-o", "/tmp/x.csv"], "--spacing"),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["scene", "assets/scenes/office.glb", "--luminaire", &lum];
+        args.extend_from_slice(extra);
+        let out = lumiview(&args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = stderr_of(&out);
+        assert!(err.contains(want), "{args:?}: `{want}` not in {err}");
+    }
+    for (lum, want) in [
+        (ies.to_string(), "no '@'"),
+        (format!("{ies}@0,2.9"), "luminaire"),
+        ("tests/data/fuzz/no-rays.tm25ray@0,2,0".to_string(), "no-rays.tm25ray"),
+        ("missing.ies@0,2,0".to_string(), "missing.ies"),
+    ] {
+        let out = lumiview(&[
+            "scene",
+            "assets/scenes/office.glb",
+            "--luminaire",
+            &lum,
+            "--grid",
+            "1",
+            "-o",
+            "/tmp/x.csv",
+        ]);
+        assert!(!out.status.success(), "{lum}");
+        let err = stderr_of(&out);
+        assert!(err.contains(want), "{lum}: `{want}` not in {err}");
+    }
+    let out = lumiview(&[
+        "scene",
+        "missing.glb",
+        "--luminaire",
+        &lum,
+        "--grid",
+        "1",
+        "-o",
+        "/tmp/x.csv",
+    ]);
+    assert!(stderr_of(&out).contains("missing.glb"), "{}", stderr_of(&out));
+}

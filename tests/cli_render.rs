@@ -149,3 +149,75 @@ fn legend_is_a_labelled_luminance_scale_under_the_still() {
         .count();
     assert!(text > 100, "labels: {text} light pixels");
 }
+
+#[test]
+fn a_scene_view_shows_the_lit_wall_at_rho_e_over_pi() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    if !gpu_or_skip() {
+        return;
+    }
+    // A 1000 cd isotropic point source at (0, 2.95, 0) in the sample office; the eye at
+    // (0, 1.5, 0.5) looks at the wall x = 3 m. There, written here independently of the renderer:
+    // E = I cos i / r² with the light 3 m in front of the wall, 1.45 m above and 0.5 m aside,
+    // and the wall's luminance-weighted reflectance from its base colour (0.52, 0.50, 0.46).
+    let ies = tmp("iso.ies");
+    std::fs::write(
+        &ies,
+        "IESNA:LM-63-2002\n[TEST] isotropic point\nTILT=NONE\n1 -1 1 3 1 1 2 0 0 0\n1 1 10\n0 90 180\n0\n1000 1000 1000\n",
+    )
+    .unwrap();
+    let out = tmp("office.exr");
+    let lum = format!("{}@0,2.95,0", ies.display());
+    let o = lumiview(
+        &[
+            "scene",
+            "assets/scenes/office.glb",
+            "--luminaire",
+            &lum,
+            "--camera",
+            "0,1.5,0.5,3,1.5,0.5",
+            "--size",
+            "65x49",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        true,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("with shadow maps") && stdout.contains("luminance in cd/m²"),
+        "{stdout}"
+    );
+    let img = lumiview::nearfield::images::read_image(&out).unwrap();
+    assert_eq!((img.width, img.height), (65, 49));
+    let l = f64::from(img.data[24 * 65 + 32]);
+    let r2: f64 = 3.0 * 3.0 + 1.45 * 1.45 + 0.5 * 0.5;
+    let e = 1000.0 * (3.0 / r2.sqrt()) / r2;
+    let rho = 0.2126 * 0.52 + 0.7152 * 0.50 + 0.0722 * 0.46;
+    let want = rho * e / std::f64::consts::PI;
+    assert!((l / want - 1.0).abs() < 0.01, "wall luminance {l} cd/m², want {want}");
+    // A PNG with its luminance scale: the legend adds rows below the view.
+    let png = tmp("office.png");
+    let o = lumiview(
+        &[
+            "scene",
+            "assets/scenes/office.glb",
+            "--luminaire",
+            &lum,
+            "--size",
+            "200x100",
+            "--legend",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        true,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("auto: the view's median luminance"));
+    let pm = Pixmap::load_png(&png).unwrap();
+    assert!(pm.width() == 200 && pm.height() > 100);
+    for p in [ies, out, png] {
+        let _ = std::fs::remove_file(p);
+    }
+}

@@ -10,6 +10,7 @@
 //! - [`emitter`]: photometric luminaires as point or area sources.
 //! - [`mod@reference`]: the path tracer ([`illuminance`], [`PerBounce`]).
 //! - [`grid`]: work-plane grids and their CSV.
+//! - [`plot`]: the grid as a plan view in false colour with isolux lines and the report figures.
 //! - [`sampling`]: the random numbers (PCG32) and direction sampling.
 //! - [`sample`]: the generated sample scenes (the office shipped as `assets/scenes/office.glb`).
 //!
@@ -22,6 +23,7 @@ pub mod grid;
 pub mod load;
 pub mod model;
 pub mod place;
+pub mod plot;
 pub mod reference;
 pub mod sample;
 pub mod sampling;

@@ -138,6 +138,18 @@ impl<'s> Tracer<'s> {
     /// Errors: a point or normal that is not finite, or a zero normal (argument `points[i]`);
     /// `direct_estimates` or `area_samples` 0 (argument `options`).
     pub fn illuminance(&self, points: &[SurfacePoint], opts: &TraceOptions) -> Result<Vec<PerBounce>> {
+        self.illuminance_with_progress(points, opts, &|_| ())
+    }
+
+    /// [`Tracer::illuminance`], calling `progress(done)` with the number of points finished as
+    /// they finish (from the worker threads, in no particular order of points). The results are
+    /// the same as without it.
+    pub fn illuminance_with_progress(
+        &self,
+        points: &[SurfacePoint],
+        opts: &TraceOptions,
+        progress: &(dyn Fn(usize) + Sync),
+    ) -> Result<Vec<PerBounce>> {
         if opts.direct_estimates == 0 || opts.area_samples == 0 {
             return Err(SceneError::invalid(
                 "options",
@@ -170,10 +182,15 @@ impl<'s> Tracer<'s> {
                 normal: n,
             });
         }
+        let done = std::sync::atomic::AtomicUsize::new(0);
         Ok(unit
             .par_iter()
             .enumerate()
-            .map(|(i, p)| self.at_point(p, opts, &mut Pcg32::for_point(opts.seed, i as u64)))
+            .map(|(i, p)| {
+                let r = self.at_point(p, opts, &mut Pcg32::for_point(opts.seed, i as u64));
+                progress(done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1);
+                r
+            })
             .collect())
     }
 

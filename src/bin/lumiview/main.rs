@@ -97,6 +97,11 @@ enum Command {
     Isolux(commands::IsoluxArgs),
     /// Render a still of the luminaire's appearance on the GPU (Vulkan): .png tone-mapped or .exr in cd/m².
     Render(commands::RenderArgs),
+    /// A glTF scene lit by photometric luminaires (FILE@X,Y,Z[,YAW]): a view rendered on the GPU
+    /// (.png tone-mapped, .exr cd/m²; direct light with shadow maps), or with --grid H the
+    /// illuminance in lx on the work plane y = H from the reference path tracer (.csv, or .png:
+    /// false colour with isolux lines), printing Ē, Emin, Emax and U0 = Emin/Ē.
+    Scene(commands::SceneArgs),
     /// Where a near-field scan's cameras sit and how well they cover the sphere: cameras per
     /// hemisphere, coincident positions, angle to the nearest camera (median, 95 %, max); -o writes
     /// a PNG (positions on equal-area discs, map of the nearest-camera angle).
@@ -163,6 +168,7 @@ fn main() -> ExitCode {
         Command::Plot(args) => commands::plot(&args),
         Command::Isolux(args) => commands::isolux(&args),
         Command::Render(args) => commands::render(&args),
+        Command::Scene(args) => commands::scene(&args),
         Command::Cameras(args) => commands::cameras(&args),
         Command::Rays2scan(args) => commands::rays2scan(&args),
         Command::Synth(args) => commands::synth(&args),

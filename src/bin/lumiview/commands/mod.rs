@@ -31,6 +31,7 @@ mod plot;
 mod proxy;
 mod rays;
 mod render;
+mod scene;
 mod solid;
 mod synth;
 
@@ -50,6 +51,7 @@ pub use plot::{plot, PlotArgs};
 pub use proxy::{proxy, ProxyArgs};
 pub use rays::{rays2scan, Rays2scanArgs};
 pub use render::{render, RenderArgs};
+pub use scene::{scene, SceneArgs};
 pub use solid::{solid, SolidArgs};
 pub use synth::{synth, SynthArgs};
 

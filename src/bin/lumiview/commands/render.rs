@@ -521,7 +521,11 @@ pub fn render(a: &RenderArgs) -> CliResult {
 /// The scale bar under a `--legend` still: luminance in cd/m² from where the tone map leaves
 /// black (display 2 %) to where it saturates (98 %), in the still's own colours, as RGBA rows
 /// `width` wide.
-fn luminance_legend(width: u32, exposure: f32, transparent: bool) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+pub(super) fn luminance_legend(
+    width: u32,
+    exposure: f32,
+    transparent: bool,
+) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
     use lumiview::gpu::farfield::tone_map;
     use lumiview::photometry::plot::legend::ScaleBar;
     let e = f64::from(exposure);
@@ -557,7 +561,7 @@ fn luminance_legend(width: u32, exposure: f32, transparent: bool) -> Result<Vec<
 }
 
 /// The `q` quantile of the luminance (cd/m²) over the covered pixels of a render from `cam`.
-fn percentile_luminance(
+pub(super) fn percentile_luminance(
     r: &mut Renderer,
     cam: &HostCamera,
     w: u32,
@@ -579,7 +583,7 @@ fn percentile_luminance(
     Ok(f64::from(l[k]))
 }
 
-fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+pub(super) fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
     let f = (target - eye).normalize();
     let s = f.cross(up).normalize();
     let u = s.cross(f);
@@ -592,7 +596,7 @@ fn look_at(eye: Vec3, target: Vec3, up: Vec3) -> Mat4 {
 }
 
 /// A right-handed perspective projection with clip depth 0…1.
-fn perspective(fovy: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
+pub(super) fn perspective(fovy: f32, aspect: f32, near: f32, far: f32) -> Mat4 {
     let f = 1.0 / (fovy / 2.0).tan();
     Mat4::from_cols(
         Vec4::new(f / aspect, 0.0, 0.0, 0.0),
