@@ -176,6 +176,7 @@ fn a_scene_view_shows_the_lit_wall_at_rho_e_over_pi() {
             &lum,
             "--camera",
             "0,1.5,0.5,3,1.5,0.5",
+            "--no-indirect",
             "--size",
             "65x49",
             "-o",
@@ -214,7 +215,9 @@ fn a_scene_view_shows_the_lit_wall_at_rho_e_over_pi() {
         true,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("auto: the view's median luminance"));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("auto: the view's median luminance"), "{stdout}");
+    assert!(stdout.contains("+ inter-reflection from 256 photons"), "{stdout}");
     let pm = Pixmap::load_png(&png).unwrap();
     assert!(pm.width() == 200 && pm.height() > 100);
     for p in [ies, out, png] {

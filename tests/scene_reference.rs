@@ -927,3 +927,93 @@ fn base64(bytes: &[u8]) -> String {
     }
     s
 }
+
+/// The office's three documented layouts for inter-reflection (docs/scene-lighting.md): the
+/// 1.2 m linear downlight in `OFFICE_LUMINAIRES`; six BEGA 50804K3 up/down lights as pendants at
+/// 2.4 m; three asymmetric point luminaires 0.6 m from the x = −3 m wall at 2.7 m.
+fn bounce_layouts() -> Vec<(&'static str, Vec<SceneLuminaire>)> {
+    let linear = photometry_text(LINEAR_IES, "linear.ies");
+    let asym = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    let bega = Arc::new(load(Path::new(BEGA), &LoadOptions::default()).unwrap());
+    let at = |p: &Arc<Photometry>, m: glam::DMat4| SceneLuminaire {
+        photometry: p.clone(),
+        scene_from_luminaire: m,
+    };
+    vec![
+        (
+            "linear downlights (OFFICE_LUMINAIRES)",
+            sample::OFFICE_LUMINAIRES
+                .iter()
+                .map(|p| at(&linear, p.matrix()))
+                .collect(),
+        ),
+        (
+            "BEGA up/down pendants at 2.4 m",
+            [-2.0, 0.0, 2.0]
+                .iter()
+                .flat_map(|&x| [-1.0, 1.0].map(|z| at(&bega, placement(x, 2.4, z, 0.0))))
+                .collect(),
+        ),
+        (
+            "asymmetric, along the x = −3 m wall",
+            [-1.2, 0.0, 1.2]
+                .iter()
+                .map(|&z| at(&asym, placement(-2.4, 2.7, z, 0.0)))
+                .collect(),
+        ),
+    ]
+}
+
+#[test]
+fn the_vpl_bounce_matches_the_path_tracer_on_the_work_plane() {
+    // The GPU's inter-reflection (scene::vpl with SceneSettings' defaults: 256 photons, clamp
+    // 0.25 m) added to the exact direct term, against the path tracer's total with every bounce,
+    // on the work plane at 0.75 m inside EN 12464-1's 0.5 m wall zone (0.25 m grid, 240 points).
+    // tests/gpu_scene.rs checks the GPU gathers these VPLs as this CPU mirror does.
+    use lumiview::scene::bvh::Bvh;
+    use lumiview::scene::vpl::{VplOptions, VplSet};
+    let scene = lumiview::scene::load(Path::new(OFFICE_GLB)).unwrap();
+    let bvh = Bvh::build(&scene);
+    let rect = FloorRect::of_bounds(&scene.bounds(), 0.5).unwrap();
+    let points = work_plane_grid(&rect, 0.75, 0.25).unwrap();
+    assert_eq!(points.len(), 240);
+    let quantiles = |mut e: Vec<f64>| {
+        e.sort_by(f64::total_cmp);
+        (e[e.len() / 2], e[e.len() * 95 / 100])
+    };
+    for (name, lums) in bounce_layouts() {
+        let tracer = Tracer::new(&scene, &lums).unwrap();
+        let reference = tracer
+            .illuminance(
+                &points,
+                &TraceOptions {
+                    paths_per_point: 1024,
+                    seed: 11,
+                    ..TraceOptions::default()
+                },
+            )
+            .unwrap();
+        let vpls = VplSet::generate(&scene, &bvh, &lums, &VplOptions::default()).unwrap();
+        let (mut with, mut without, mut se) = (Vec::new(), Vec::new(), 0.0f64);
+        for (p, r) in points.iter().zip(&reference) {
+            let total = r.direct_lx + vpls.illuminance_lx(p.position_m, p.normal);
+            with.push((total / r.total_lx - 1.0).abs());
+            without.push((r.direct_lx / r.total_lx - 1.0).abs());
+            se = se.max(r.total_se_lx / r.total_lx);
+        }
+        let (med, p95) = quantiles(with);
+        let (dmed, dp95) = quantiles(without);
+        let share = reference.iter().map(|r| r.indirect_lx() / r.total_lx).sum::<f64>() / points.len() as f64;
+        println!(
+            "| {name} | {} | {:.0} % | {:.1} % / {:.1} % | {:.1} % / {:.1} % | {:.1} % |",
+            vpls.vpls.len(),
+            100.0 * share,
+            100.0 * med,
+            100.0 * p95,
+            100.0 * dmed,
+            100.0 * dp95,
+            100.0 * se
+        );
+        assert!(med < 0.05 && p95 < 0.15, "{name}: median {med}, p95 {p95}");
+    }
+}

@@ -24,13 +24,24 @@ struct SceneFrame {
     clip_from_world: mat4x4<f32>,
     // xyz = the eye (w = 1) or the direction towards it (w = 0, orthographic).
     eye: vec4<f32>,
-    // x = exposure (m²/cd), y = mode (0 luminance, 1 tone mapped), z = lux floor, w = unused.
+    // x = exposure (m²/cd), y = mode (0 luminance, 1 tone mapped), z = lux floor, w = the VPL
+    // clamp distance squared (m²).
     params: vec4<f32>,
     // x = tile size (px), y = tiles across, z = tiles down, w = number of luminaires.
     tiles: vec4<u32>,
     // x = intensity tables per atlas row, y = shadow faces per atlas row, z = face size (px),
     // w = 1 with shadows, 0 without.
     atlas: vec4<u32>,
+    // x = virtual point lights gathered (0: no inter-reflection); yzw unused.
+    indirect: vec4<u32>,
+};
+
+// A virtual point light (scene::vpl): a point of a surface that reflects `flux` (lm per channel)
+// to the side its normal faces, as a Lambertian emitter.
+struct Vpl {
+    position: vec4<f32>,
+    normal: vec4<f32>,
+    flux: vec4<f32>,
 };
 
 struct Light {
@@ -56,6 +67,8 @@ struct Light {
 @group(0) @binding(3) var intensity_atlas: texture_2d<f32>;
 // Six faces per luminaire (CUBE_FORWARD order), face size frame.atlas.z.
 @group(0) @binding(4) var shadow_atlas: texture_depth_2d;
+// frame.indirect.x of them (the buffer holds at least one).
+@group(0) @binding(5) var<storage, read> vpls: array<Vpl>;
 
 struct VsIn {
     @location(0) position: vec3<f32>,
@@ -261,6 +274,29 @@ fn direct_lx(frag: vec2<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
     return e;
 }
 
+// Inter-reflected illuminance (lx per channel) at x with normal n: every VPL at y (normal n_y,
+// flux Φ) gives Φ cos θ_y cos θ_x / (π · max(r², clamp²)), without visibility (scene::vpl).
+fn indirect_lx(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let clamp2 = frame.params.w;
+    var e = vec3<f32>(0.0);
+    for (var i = 0u; i < frame.indirect.x; i = i + 1u) {
+        let v = vpls[i];
+        let d = x - v.position.xyz;
+        let r2 = dot(d, d);
+        if (r2 <= 0.0) {
+            continue;
+        }
+        let inv_r = inverseSqrt(r2);
+        let cos_v = dot(v.normal.xyz, d) * inv_r;
+        let cos_x = -dot(n, d) * inv_r;
+        if (cos_v <= 0.0 || cos_x <= 0.0) {
+            continue;
+        }
+        e = e + v.flux.xyz * (cos_v * cos_x / (PI * max(r2, clamp2)));
+    }
+    return e;
+}
+
 fn scene_color(in: VsOut) -> vec4<f32> {
     var to_eye = frame.eye.xyz;
     if (frame.eye.w > 0.5) {
@@ -271,7 +307,7 @@ fn scene_color(in: VsOut) -> vec4<f32> {
     if (dot(n, to_eye) < 0.0) {
         n = -n;
     }
-    let e = direct_lx(in.clip.xy, in.world, n);
+    let e = vec3<f32>(direct_lx(in.clip.xy, in.world, n)) + indirect_lx(in.world, n);
     let l = in.reflectance * (e / PI);
     if (frame.params.y > 0.5) {
         let exposure = frame.params.x;

@@ -129,6 +129,10 @@ pub enum Arg {
     LuxFloor,
     /// The scene pass's largest shadow-map face (px).
     FacePx,
+    /// Photons shot for the scene's inter-reflection.
+    BouncePhotons,
+    /// The distance a virtual point light's 1/r² is held at.
+    VplClamp,
 }
 
 impl Arg {
@@ -157,6 +161,8 @@ impl Arg {
             Arg::Scene => "scene",
             Arg::LuxFloor => "lux_floor_lx",
             Arg::FacePx => "max_face_px",
+            Arg::BouncePhotons => "bounce_photons",
+            Arg::VplClamp => "vpl_clamp_m",
         }
     }
 }

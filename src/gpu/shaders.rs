@@ -244,8 +244,16 @@ mod tests {
                 eye,
                 params,
                 tiles,
-                atlas
+                atlas,
+                indirect
             }),
+        );
+        assert_same(
+            "scene",
+            "Vpl",
+            wgsl_layout(&m, "Vpl"),
+            "VplRecord",
+            rust_layout!(super::super::scene::VplRecord { position, normal, flux }),
         );
         assert_same(
             "scene",

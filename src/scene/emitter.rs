@@ -376,6 +376,26 @@ impl Emitter {
         self.photometry.web.sample_dir([l.x, l.y, l.z])
     }
 
+    /// Intensity in cd towards the luminaire-frame unit direction `d`.
+    pub(crate) fn intensity_local(&self, d: DVec3) -> f64 {
+        self.photometry.web.sample_dir([d.x, d.y, d.z])
+    }
+
+    /// Where a photon leaving in the luminaire-frame unit direction `d` starts (a point of the
+    /// opening drawn as for direct light) and its direction, both in scene coordinates.
+    pub(crate) fn emit(&self, d: DVec3, rng: &mut Pcg32) -> (DVec3, DVec3) {
+        let p = if self.is_point() {
+            DVec3::ZERO
+        } else {
+            let (u, v) = (rng.next_f64(), rng.next_f64());
+            self.sampler.sample(d, u, v, rng)
+        };
+        (
+            self.scene_from_luminaire.transform_point3(p),
+            self.scene_from_luminaire.transform_vector3(d).normalize_or_zero(),
+        )
+    }
+
     /// One estimate of the direct illuminance (lx) at `x` with unit normal `n`, from `samples`
     /// points on the opening (rounded up to a square; 1 for a point source). `offset_m` moves
     /// shadow rays off the surface at x.

@@ -11,6 +11,7 @@
 //! - [`mod@reference`]: the path tracer ([`illuminance`], [`PerBounce`]).
 //! - [`grid`]: work-plane grids and their CSV.
 //! - [`plot`]: the grid as a plan view in false colour with isolux lines and the report figures.
+//! - [`vpl`]: inter-reflection by virtual point lights shot from the luminaires (the GPU's bounce).
 //! - [`sampling`]: the random numbers (PCG32) and direction sampling.
 //! - [`sample`]: the generated sample scenes (the office shipped as `assets/scenes/office.glb`).
 //!
@@ -28,6 +29,7 @@ pub mod reference;
 pub mod sample;
 pub mod sampling;
 pub mod texture;
+pub mod vpl;
 
 pub use emitter::SceneLuminaire;
 pub use error::SceneError;

@@ -98,7 +98,7 @@ enum Command {
     /// Render a still of the luminaire's appearance on the GPU (Vulkan): .png tone-mapped or .exr in cd/m².
     Render(commands::RenderArgs),
     /// A glTF scene lit by photometric luminaires (FILE@X,Y,Z[,YAW]): a view rendered on the GPU
-    /// (.png tone-mapped, .exr cd/m²; direct light with shadow maps), or with --grid H the
+    /// (.png tone-mapped, .exr cd/m²; direct light with shadow maps and inter-reflection), or with --grid H the
     /// illuminance in lx on the work plane y = H from the reference path tracer (.csv, or .png:
     /// false colour with isolux lines), printing Ē, Emin, Emax and U0 = Emin/Ē.
     Scene(commands::SceneArgs),

@@ -43,7 +43,10 @@ use super::frame::{FrameView, Pass};
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat};
 use super::{Arg, GpuError};
-use crate::scene::Scene;
+use crate::scene::bvh::Bvh;
+use crate::scene::vpl::{EmissionTable, VplOptions, VplSet};
+use crate::scene::{Scene, SceneLuminaire};
+use bytemuck::Zeroable as _;
 use lights::{
     LightRecord, PlacedLight, INTENSITY_TABLE_H, INTENSITY_TABLE_W, MAX_INTENSITY_TABLES, MAX_TABLES_PER_ROW,
 };
@@ -61,7 +64,18 @@ pub struct SceneSettings {
     pub shadow_budget_bytes: u64,
     /// Largest cube face, pixels (faces shrink by powers of two to fit the budget).
     pub max_face_px: u32,
+    /// Inter-reflection from virtual point lights (`scene::vpl`: photons shot from the
+    /// luminaires on the CPU, every reflection gathered per fragment, all bounces).
+    pub indirect: bool,
+    /// Photons shot from all luminaires together (each leaves a VPL per reflection: about 1.7–2×
+    /// as many VPLs in the office), 1…[`MAX_BOUNCE_PHOTONS`].
+    pub bounce_photons: u32,
+    /// Distance below which a VPL's 1/r² is held, metres (finite, ≥ 0).
+    pub vpl_clamp_m: f32,
 }
+
+/// Most photons [`SceneSettings::bounce_photons`] may ask for.
+pub const MAX_BOUNCE_PHOTONS: u32 = 1 << 16;
 
 impl Default for SceneSettings {
     fn default() -> Self {
@@ -70,6 +84,9 @@ impl Default for SceneSettings {
             shadows: true,
             shadow_budget_bytes: 64 << 20,
             max_face_px: 512,
+            indirect: true,
+            bounce_photons: 256,
+            vpl_clamp_m: 0.25,
         }
     }
 }
@@ -88,6 +105,18 @@ impl SceneSettings {
         }
         if self.shadow_budget_bytes == 0 {
             return Err(GpuError::invalid(Arg::BudgetBytes, "the shadow budget must be > 0"));
+        }
+        if !(1..=MAX_BOUNCE_PHOTONS).contains(&self.bounce_photons) {
+            return Err(GpuError::invalid(
+                Arg::BouncePhotons,
+                format!("{} must be within 1…{MAX_BOUNCE_PHOTONS}", self.bounce_photons),
+            ));
+        }
+        if !(self.vpl_clamp_m.is_finite() && self.vpl_clamp_m >= 0.0) {
+            return Err(GpuError::invalid(
+                Arg::VplClamp,
+                format!("{} m must be finite and ≥ 0", self.vpl_clamp_m),
+            ));
         }
         if !(MIN_FACE_PX..=shadows::MAX_ATLAS_SIDE).contains(&self.max_face_px) {
             return Err(GpuError::invalid(
@@ -118,6 +147,8 @@ pub struct SceneFrameUniform {
     pub tiles: [u32; 4],
     /// Intensity tables per row, shadow faces per row, face size, shadows on.
     pub atlas: [u32; 4],
+    /// Virtual point lights gathered (0: no inter-reflection), unused × 3.
+    pub indirect: [u32; 4],
 }
 
 /// Uniform block of one shadow face (`ShadowFace` in shaders/scene/shadow.wgsl).
@@ -207,6 +238,29 @@ struct ShadowCache {
     view: wgpu::TextureView,
 }
 
+/// One virtual point light as the shader reads it (`Vpl` in shaders/scene/lighting.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct VplRecord {
+    /// Position, world metres (w unused).
+    pub position: [f32; 4],
+    /// Unit normal of the lit side (w unused).
+    pub normal: [f32; 4],
+    /// Reflected flux per channel, lm (w unused).
+    pub flux: [f32; 4],
+}
+
+/// The VPLs of the last frame and what they were made for.
+#[derive(Debug)]
+struct VplCache {
+    /// Scene generation, each instance's photometry address and matrix bits, photons, clamp bits.
+    key: (u64, Vec<(usize, [u32; 16])>, u32, u32),
+    buffer: wgpu::Buffer,
+    count: u32,
+    /// Held, so that an address in the key is never reused for another photometry.
+    _photometries: Vec<Arc<crate::photometry::Photometry>>,
+}
+
 /// What a scene pipeline is specialised for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
@@ -232,6 +286,13 @@ pub struct ScenePass {
     placeholder_depth: wgpu::TextureView,
     placeholder_table: wgpu::TextureView,
     generations: u64,
+    /// The scene on the CPU (photons are traced through it) and its hierarchy, built on first use.
+    cpu: Option<(Arc<Scene>, Option<Arc<Bvh>>)>,
+    /// Emission tables of the photometries seen, kept while they are.
+    emission: Vec<(Arc<crate::photometry::Photometry>, Arc<EmissionTable>)>,
+    vpls: Option<VplCache>,
+    /// A one-VPL zero buffer bound when there is no inter-reflection.
+    no_vpls: wgpu::Buffer,
 }
 
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
@@ -325,6 +386,7 @@ impl ScenePass {
                     storage_entry(2),
                     texture_entry(3, wgpu::TextureSampleType::Float { filterable: false }),
                     texture_entry(4, wgpu::TextureSampleType::Depth),
+                    storage_entry(5),
                 ],
             });
             let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -394,6 +456,10 @@ impl ScenePass {
                 placeholder_depth,
                 placeholder_table,
                 generations: 0,
+                cpu: None,
+                emission: Vec::new(),
+                vpls: None,
+                no_vpls: storage_buffer(ctx, "no VPLs", bytemuck::bytes_of(&VplRecord::zeroed())),
             })
         })
     }
@@ -435,6 +501,8 @@ impl ScenePass {
             generation: self.generations,
         });
         self.shadows = None;
+        self.vpls = None;
+        self.cpu = Some((Arc::new(scene.clone()), None));
         Ok(())
     }
 
@@ -443,6 +511,110 @@ impl ScenePass {
         self.mesh = None;
         self.shadows = None;
         self.tables = None;
+        self.vpls = None;
+        self.cpu = None;
+        self.emission.clear();
+    }
+
+    /// The virtual point lights of `instances` (made again when the scene, a luminaire or the
+    /// settings changed; an empty set without a scene or with indirect light off): the count
+    /// uploaded.
+    ///
+    /// Errors: `InvalidArgument` (`Arg::Instance`) for an instance whose model matrix scales,
+    /// shears or mirrors (photons need a rotation and a translation); what uploading reports.
+    fn virtual_lights(
+        &mut self,
+        ctx: &GpuContext,
+        instances: &[(Arc<FarfieldLuminaire>, Mat4)],
+    ) -> Result<u32, GpuError> {
+        let settings = self.settings;
+        let (Some(mesh), Some((scene, bvh))) = (&self.mesh, &mut self.cpu) else {
+            return Ok(0);
+        };
+        if !settings.indirect || instances.is_empty() {
+            return Ok(0);
+        }
+        let key = (
+            mesh.generation,
+            instances
+                .iter()
+                .map(|(l, m)| (Arc::as_ptr(&l.photometry) as usize, m.to_cols_array().map(f32::to_bits)))
+                .collect::<Vec<_>>(),
+            settings.bounce_photons,
+            settings.vpl_clamp_m.to_bits(),
+        );
+        if let Some(v) = &self.vpls {
+            if v.key == key {
+                return Ok(v.count);
+            }
+        }
+        let scene = scene.clone();
+        let bvh = bvh.get_or_insert_with(|| Arc::new(Bvh::build(&scene))).clone();
+        // Emission tables: kept for the photometries still in use, made for new ones.
+        self.emission
+            .retain(|(p, _)| instances.iter().any(|(l, _)| Arc::ptr_eq(p, &l.photometry)));
+        let mut tables = Vec::with_capacity(instances.len());
+        let mut luminaires = Vec::with_capacity(instances.len());
+        for (lum, model) in instances {
+            let table = match self.emission.iter().find(|(p, _)| Arc::ptr_eq(p, &lum.photometry)) {
+                Some((_, t)) => t.clone(),
+                None => {
+                    let t = Arc::new(EmissionTable::of(&lum.photometry));
+                    self.emission.push((lum.photometry.clone(), t.clone()));
+                    t
+                }
+            };
+            tables.push(table);
+            luminaires.push(SceneLuminaire {
+                photometry: lum.photometry.clone(),
+                scene_from_luminaire: model.as_dmat4(),
+            });
+        }
+        let opts = VplOptions {
+            photons: settings.bounce_photons as usize,
+            clamp_m: f64::from(settings.vpl_clamp_m),
+            ..VplOptions::default()
+        };
+        let set = VplSet::generate_with(&scene, &bvh, &luminaires, &tables, &opts)
+            .map_err(|e| GpuError::invalid(Arg::Instance, format!("inter-reflection: {e}")))?;
+        let records: Vec<VplRecord> = set
+            .vpls
+            .iter()
+            .map(|v| VplRecord {
+                position: [v.position_m.x as f32, v.position_m.y as f32, v.position_m.z as f32, 0.0],
+                normal: [v.normal.x as f32, v.normal.y as f32, v.normal.z as f32, 0.0],
+                flux: [
+                    v.flux_rgb_lm[0] as f32,
+                    v.flux_rgb_lm[1] as f32,
+                    v.flux_rgb_lm[2] as f32,
+                    0.0,
+                ],
+            })
+            .collect();
+        let max_binding = ctx.device.limits().max_storage_buffer_binding_size;
+        let bytes = std::mem::size_of_val(records.as_slice()) as u64;
+        if bytes > max_binding {
+            return Err(GpuError::invalid(
+                Arg::BouncePhotons,
+                format!(
+                    "{} photons left {} virtual point lights ({bytes} bytes), more than the device's {max_binding} a \
+                     binding: ask for fewer",
+                    settings.bounce_photons,
+                    records.len()
+                ),
+            ));
+        }
+        let count = records.len() as u32;
+        let buffer = ctx.scoped("uploading virtual point lights", || {
+            Ok(storage_buffer(ctx, "scene VPLs", bytemuck::cast_slice(&records)))
+        })?;
+        self.vpls = Some(VplCache {
+            key,
+            buffer,
+            count,
+            _photometries: instances.iter().map(|(l, _)| l.photometry.clone()).collect(),
+        });
+        Ok(count)
     }
 
     /// Whether a scene is loaded.
@@ -738,11 +910,17 @@ impl Pass for ScenePass {
                 ),
             ));
         }
+        let vpl_count = self.virtual_lights(ctx, instances)?;
         let options = view.options();
         let uniform = SceneFrameUniform {
             clip_from_world: clip_from_world.to_cols_array_2d(),
             eye: view.camera().eye_in(Mat4::IDENTITY).to_array(),
-            params: [options.exposure, view.output_flag(), settings.lux_floor_lx, 0.0],
+            params: [
+                options.exposure,
+                view.output_flag(),
+                settings.lux_floor_lx,
+                settings.vpl_clamp_m * settings.vpl_clamp_m,
+            ],
             tiles: [lights::TILE_PX, tiles_x, tiles_y, records.len() as u32],
             atlas: [
                 per_row,
@@ -750,6 +928,7 @@ impl Pass for ScenePass {
                 layout.map_or(1, |l| l.face_px),
                 u32::from(layout.is_some()),
             ],
+            indirect: [vpl_count, 0, 0, 0],
         };
         let key = PipelineKey {
             color: target.color,
@@ -789,6 +968,13 @@ impl Pass for ScenePass {
                     wgpu::BindGroupEntry {
                         binding: 4,
                         resource: wgpu::BindingResource::TextureView(shadow),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: match (&self.vpls, vpl_count) {
+                            (Some(v), 1..) => v.buffer.as_entire_binding(),
+                            _ => self.no_vpls.as_entire_binding(),
+                        },
                     },
                 ],
             }))

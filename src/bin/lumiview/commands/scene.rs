@@ -1,6 +1,6 @@
 //! `lumiview scene`: a glTF scene lit by photometric luminaires. Without `--grid`, a view rendered
 //! on the GPU (Vulkan) as a host would get it: the lit room in cd/m² (L = ρE/π, direct light with
-//! shadow maps) with the luminaires' own appearance, as PNG (tone-mapped) or OpenEXR (cd/m²). With
+//! shadow maps and inter-reflection from virtual point lights) with the luminaires' own appearance, as PNG (tone-mapped) or OpenEXR (cd/m²). With
 //! `--grid H`, the illuminance in lx on the work plane y = H, computed by the reference path
 //! tracer (direct light with visibility and every inter-reflection), as CSV or as a false-colour
 //! plan with isolux lines; Ē, Emin, Emax and U0 are printed. Conventions: docs/scene-lighting.md.
@@ -93,6 +93,13 @@ pub struct SceneArgs {
     /// Render the view without shadows (every luminaire reaches every surface facing it).
     #[arg(long)]
     pub no_shadows: bool,
+    /// Render the view without inter-reflection (direct light only).
+    #[arg(long)]
+    pub no_indirect: bool,
+    /// Photons shot from the luminaires for the view's inter-reflection (each reflection leaves a
+    /// virtual point light that every pixel gathers; docs/scene-lighting.md).
+    #[arg(long, value_name = "N")]
+    pub bounce_photons: Option<u32>,
     #[command(flatten)]
     pub load: LoadArgs,
 }
@@ -174,6 +181,8 @@ pub fn scene(args: &SceneArgs) -> CliResult {
         (args.exposure.is_some(), "--exposure"),
         (args.legend, "--legend"),
         (args.no_shadows, "--no-shadows"),
+        (args.no_indirect, "--no-indirect"),
+        (args.bounce_photons.is_some(), "--bounce-photons"),
     ];
     if args.grid.is_some() {
         if !matches!(ext.as_deref(), Some("csv" | "png")) {
@@ -430,10 +439,17 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
     };
     let mut r = Renderer::new(&ContextDesc::default())?;
     r.set_scene(scene)?;
-    r.set_scene_settings(SceneSettings {
+    if args.no_indirect && args.bounce_photons.is_some() {
+        return Err("--bounce-photons and --no-indirect contradict each other".into());
+    }
+    let settings = SceneSettings {
         shadows: !args.no_shadows,
+        indirect: !args.no_indirect,
+        bounce_photons: args.bounce_photons.unwrap_or(SceneSettings::default().bounce_photons),
         ..SceneSettings::default()
-    })?;
+    };
+    r.set_scene_settings(settings)
+        .map_err(|e| format!("--bounce-photons: {e}"))?;
     let mut ids: HashMap<*const Photometry, lumiview::gpu::LuminaireId> = HashMap::new();
     for p in placed {
         let key = Arc::as_ptr(&p.photometry);
@@ -525,7 +541,7 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
     }
     println!(
         "{}: {w}×{h}, eye ({:.2}, {:.2}, {:.2}) m looking at ({:.2}, {:.2}, {:.2}) m, fov {}°; {} triangles, {} \
-         luminaires; direct light{} (no inter-reflection yet); {} ({})",
+         luminaires; direct light{}{}; {} ({})",
         args.output.display(),
         eye.x,
         eye.y,
@@ -540,6 +556,14 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
             " without shadows"
         } else {
             " with shadow maps"
+        },
+        if args.no_indirect {
+            ", no inter-reflection".to_string()
+        } else {
+            format!(
+                " + inter-reflection from {} photons (virtual point lights, every bounce)",
+                settings.bounce_photons
+            )
         },
         if exr {
             "luminance in cd/m²".to_string()
