@@ -181,6 +181,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// Every instance as (id, luminaire, model matrix), in id order.
+    pub fn instances(&self) -> impl Iterator<Item = (InstanceId, LuminaireId, Mat4)> + '_ {
+        self.instances.iter().map(|(id, i)| (*id, i.luminaire, i.model))
+    }
+
     /// An instance's luminaire and model matrix.
     pub fn instance(&self, id: InstanceId) -> Result<(LuminaireId, Mat4), GpuError> {
         self.instances
