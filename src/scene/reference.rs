@@ -1,5 +1,6 @@
 //! The reference: a CPU path tracer for illuminance in diffuse scenes lit by photometric luminaires,
-//! with the light split by bounce. For tests and evaluation, not for frames.
+//! with the light split by bounce. For tests, evaluation and the C API's illuminance queries
+//! (`lumi_scene_illuminance`), not for frames.
 //!
 //! # What it computes
 //! The illuminance E (lx) at calculation points, each a position and the unit normal of the
