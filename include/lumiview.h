@@ -110,6 +110,20 @@
 // Overlay bit: housing box from the file's luminaire dimensions (blue), where it has them.
 #define LUMI_OVERLAY_HOUSING 2
 
+// `lumi_illuminance_options.light`: direct light only (straight from the luminaires, with
+// shadows).
+#define LUMI_ILLUMINANCE_DIRECT 0
+
+// `lumi_illuminance_options.light`: direct light plus inter-reflection, every bounce (the default).
+#define LUMI_ILLUMINANCE_TOTAL 1
+
+// Most points one `lumi_scene_illuminance` call takes.
+#define LUMI_ILLUMINANCE_MAX_POINTS 1048576
+
+// Most paths per point, direct estimates per point, and area samples per estimate one
+// `lumi_scene_illuminance` call takes.
+#define LUMI_ILLUMINANCE_MAX_SAMPLES 65536
+
 // Colour format: linear cd/m² in RGBA16F (alpha = coverage, premultiplied).
 #define LUMI_COLOR_RGBA16F 0
 
@@ -312,6 +326,55 @@ typedef struct lumi_render_options {
 // Handle of a render target, owned by its context (0 is never a valid handle).
 typedef uint64_t lumi_target;
 
+// How the scene `lumi_render` draws is lit (the GPU pass). Start from
+// `lumi_scene_settings_default()`.
+typedef struct lumi_scene_settings {
+  // Visibility from shadow maps; false lets every luminaire reach every point facing it.
+  bool shadows;
+  // The illuminance below which a luminaire's light is left out, lux (finite, > 0): its
+  // influence radius is where I_max / r² falls to it.
+  float lux_floor_lx;
+  // Most bytes of the shadow-map atlas (> 0; 4 bytes a texel). Cube faces shrink by powers of
+  // two until every luminaire's six fit; below 16 px a render fails naming this field.
+  uint64_t shadow_budget_bytes;
+  // Largest cube-map face, pixels (16…8192).
+  uint32_t max_face_px;
+  // Inter-reflection from virtual point lights: photons shot from the luminaires on the CPU
+  // (made again when the scene or an instance changes), every reflection gathered per pixel,
+  // all bounces, without visibility between the reflection and the pixel
+  // (docs/scene-lighting.md, "Inter-reflection").
+  bool indirect;
+  // Photons shot from all instances together, 1…65,536 (each leaves one virtual point light per
+  // reflection; a frame's cost grows with their number).
+  uint32_t bounce_photons;
+  // Distance below which a virtual point light's 1/r² is held, metres (finite, ≥ 0).
+  float vpl_clamp_m;
+} lumi_scene_settings;
+
+// How `lumi_scene_illuminance` estimates. Start from `lumi_illuminance_options_default()`.
+typedef struct lumi_illuminance_options {
+  // `LUMI_ILLUMINANCE_TOTAL` (direct plus every bounce of inter-reflection) or
+  // `LUMI_ILLUMINANCE_DIRECT`.
+  uint32_t light;
+  // Indirect paths per point with `LUMI_ILLUMINANCE_TOTAL`, 1…`LUMI_ILLUMINANCE_MAX_SAMPLES`
+  // (ignored with `LUMI_ILLUMINANCE_DIRECT`). The indirect part's standard error falls as
+  // 1/√paths.
+  uint32_t paths_per_point;
+  // Independent estimates of the direct term per point, 1…`LUMI_ILLUMINANCE_MAX_SAMPLES` (their
+  // spread gives the direct term's standard error; a scene lit only by point sources uses one,
+  // exact).
+  uint32_t direct_estimates;
+  // Points drawn on each luminaire's luminous opening per direct estimate,
+  // 1…`LUMI_ILLUMINANCE_MAX_SAMPLES`, rounded up to a square; ignored for point openings.
+  uint32_t area_samples;
+  // Seed of the random numbers: the same seed, scene, instances and points give the same
+  // numbers, whatever the number of threads.
+  uint64_t seed;
+} lumi_illuminance_options;
+
+// Handle of a scene, owned by its context (0 is never a valid handle).
+typedef uint64_t lumi_scene;
+
 // How to create a target. Start from `lumi_target_desc_default()`.
 typedef struct lumi_target_desc {
   // Width in pixels, 1…16384.
@@ -453,8 +516,8 @@ struct lumi_context_desc lumi_context_desc_default(void);
 // `desc` is NULL or points to a valid descriptor; `out` points to writable storage.
 lumi_status lumi_context_create(const struct lumi_context_desc *desc, struct lumi_context **out);
 
-// Destroys a context and everything it owns (luminaires, instances, targets). Waits for the GPU
-// (not once a panic has poisoned the context).
+// Destroys a context and everything it owns (luminaires, instances, targets, scenes). Waits for
+// the GPU (not once a panic has poisoned the context).
 // NULL is ignored. Exported fds already handed out stay valid (the host owns them).
 //
 // # Safety
@@ -689,6 +752,126 @@ lumi_status lumi_render(struct lumi_context *ctx,
                         lumi_target target,
                         const struct lumi_camera *camera,
                         const struct lumi_render_options *options);
+
+// The GPU pass's defaults: shadows on, lux floor 0.1 lx, shadow budget 64 MiB, faces up to 512 px,
+// inter-reflection on from 256 photons with a 0.25 m clamp.
+struct lumi_scene_settings lumi_scene_settings_default(void);
+
+// The defaults: `LUMI_ILLUMINANCE_TOTAL`, 512 paths per point, 4 direct estimates of 64 area
+// samples each, seed 1 (in the sample office: about 1 % standard error on the work plane; cost
+// measured in docs/scene-lighting.md, "C API").
+struct lumi_illuminance_options lumi_illuminance_options_default(void);
+
+// Loads a glTF 2.0 scene (`.glb`, or `.gltf` with its buffers and PNG textures beside it or
+// embedded) for drawing (`lumi_context_set_scene`) and for illuminance (`lumi_scene_illuminance`).
+// Coordinates are glTF's: metres, +Y up; surfaces are Lambertian with the materials' base colour
+// (docs/scene-lighting.md). The ray-query hierarchy is built here, once. A file that loads but is
+// doubtful (a primitive without a material, lines or points, a JPEG texture) succeeds and sends one
+// warning per finding, naming the file, to the log callback.
+//
+// - `path`: NUL-terminated UTF-8 path, borrowed for the call.
+// - `out`: receives the handle (owned by the context: free it with `lumi_scene_destroy` or by
+//   destroying the context); written only on success.
+//
+// Errors: `LUMI_STATUS_NULL_POINTER` (`path`, `out`), `LUMI_STATUS_INVALID_ARGUMENT` (`path` empty
+// or not UTF-8), `LUMI_STATUS_IO` (the file, or a buffer or image it names, cannot be read, is not
+// a regular file or is over 1 GiB), `LUMI_STATUS_PARSE` (not glTF 2.0, a truncated GLB, an index or
+// accessor out of range, non-finite positions, more than 8 million triangles, no triangles,
+// unsupported features; the text names the file and the glTF object), `LUMI_STATUS_OUT_OF_MEMORY`.
+//
+// Threading: one thread at a time per context; the load holds the context's lock.
+//
+// # Safety
+// `ctx` is a live context; `path` a NUL-terminated string; `out` writable.
+lumi_status lumi_scene_load(struct lumi_context *ctx, const char *path, lumi_scene *out);
+
+// Frees a scene. If it is the scene `lumi_render` draws, the context draws none from then on.
+// Handle 0 is ignored; a stale, foreign or wrong-kind handle is an error (nothing changes).
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context.
+lumi_status lumi_scene_destroy(struct lumi_context *ctx, lumi_scene scene);
+
+// Chooses the scene `lumi_render` draws: from the next render on, every frame draws `scene` from
+// the camera, lit by every far-field instance of the context (direct light with shadow maps,
+// luminance L = ρ·E/π in cd/m²), before the luminaires' own appearance, in the same depth test.
+// `scene` 0 draws none. The scene is uploaded to the GPU here (setting the scene already drawn
+// does nothing); on an error the context draws what it drew before.
+//
+// Errors: `LUMI_STATUS_INVALID_ARGUMENT` (a stale, foreign or wrong-kind handle; a scene whose
+// vertices exceed the device's largest buffer, naming `scene`), `LUMI_STATUS_GPU`,
+// `LUMI_STATUS_OUT_OF_MEMORY` (the upload).
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context.
+lumi_status lumi_context_set_scene(struct lumi_context *ctx, lumi_scene scene);
+
+// Sets how the drawn scene is lit (`lumi_scene_settings`; kept by the context, also while no scene
+// is set). On an error nothing changes.
+//
+// - `settings`: required; read during the call only.
+//
+// Errors: `LUMI_STATUS_NULL_POINTER` (`settings`), `LUMI_STATUS_INVALID_ARGUMENT` naming the
+// field (`settings.lux_floor_lx` not finite or not > 0, `settings.shadow_budget_bytes` 0,
+// `settings.max_face_px` outside 16…8192).
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context; `settings` NULL or valid.
+lumi_status lumi_context_set_scene_settings(struct lumi_context *ctx,
+                                            const struct lumi_scene_settings *settings);
+
+// Illuminance in lux at host-given points of a scene, on the side each normal faces, from every
+// far-field (photometric) instance of the context placed by its model matrix, with visibility
+// (the scene's surfaces cast shadows; luminaires and the points themselves do not), computed by
+// the CPU reference path tracer (docs/scene-lighting.md, "C API"): the direct term from shadow
+// rays to points on each luminous opening, and with `LUMI_ILLUMINANCE_TOTAL` inter-reflection
+// between the scene's Lambertian surfaces by path tracing (every bounce: Russian roulette, capped
+// at 64). Instances of near-field scans are skipped: they add no light (a scan has no far-field
+// intensity; the drawn scene is not lit by them either). With no far-field instance every point
+// gets 0 lx. The scene need not be the one `lumi_render` draws.
+//
+// - `points_m`: `3 × count` floats, x, y, z of each point in scene metres (glTF axes, +Y up).
+// - `normals`: `3 × count` floats, the normal of each point's receiving side (any non-zero
+//   length; normalised), e.g. (0, 1, 0) for a work plane or a floor.
+// - `count`: 1…`LUMI_ILLUMINANCE_MAX_POINTS`.
+// - `opts`: NULL for `lumi_illuminance_options_default()`.
+// - `out_lx`: `count` doubles, the illuminance of each point, lux.
+// - `out_std_error_lx`: NULL, or `count` doubles, each estimate's standard error, lux (0 where
+//   the estimate is exact: direct light from point sources only).
+//
+// Both outputs are written only on success. Cost: per point and far-field instance, about
+// `direct_estimates × area_samples` shadow rays, plus one closest-hit and one shadow ray per
+// bounce of each of `paths_per_point` paths, on every core (measured in docs/scene-lighting.md);
+// the call holds the context's lock until it is done.
+//
+// Errors: `LUMI_STATUS_NULL_POINTER` (`points_m`, `normals`, `out_lx`),
+// `LUMI_STATUS_INVALID_ARGUMENT` naming the argument: `count` 0 or above the cap; `opts.light`
+// unknown; `opts.paths_per_point` (with `LUMI_ILLUMINANCE_TOTAL`), `opts.direct_estimates`,
+// `opts.area_samples` 0 or above `LUMI_ILLUMINANCE_MAX_SAMPLES`; a stale, foreign or wrong-kind
+// `scene`; a point that is not finite (`points_m`), a normal that is not finite or zero
+// (`normals`); an instance whose model matrix scales, shears or mirrors (`instance`, naming its
+// handle: the tracer needs a rotation and a translation).
+//
+// Threading: one thread at a time per context.
+//
+// # Safety
+// `ctx` is a live context; `points_m` and `normals` NULL or `3 × count` readable floats each;
+// `opts` NULL or valid; `out_lx` NULL or `count` writable doubles; `out_std_error_lx` NULL or
+// `count` writable doubles.
+lumi_status lumi_scene_illuminance(const struct lumi_context *ctx,
+                                   lumi_scene scene,
+                                   const float *points_m,
+                                   const float *normals,
+                                   size_t count,
+                                   const struct lumi_illuminance_options *opts,
+                                   double *out_lx,
+                                   double *out_std_error_lx);
 
 // A default target: 1280 × 720, RGBA32F (half float overflows above 65,504 cd/m², which many
 // luminaires exceed), R32F depth, exportable.

@@ -9,11 +9,12 @@
 // - Errors are exceptions. A C call that returns anything but `LUMI_STATUS_OK` throws `lumi::error`
 //   carrying that status and the text of `lumi_last_error` copied right after the failure, on the
 //   same thread. A call on an empty object (default-constructed or moved from) throws `lumi::error`
-//   with `LUMI_STATUS_NULL_POINTER` without calling C (the C functions want a live context).
-//   Otherwise only the standard library's own exceptions (`std::bad_alloc`) come out. Destructors
-//   never throw.
+//   with `LUMI_STATUS_NULL_POINTER` without calling C (the C functions want a live context), and
+//   `scene::illuminance` with no points, or point and normal lists of different lengths, throws
+//   `LUMI_STATUS_INVALID_ARGUMENT` without calling C. Otherwise only the standard library's own
+//   exceptions (`std::bad_alloc`) come out. Destructors never throw.
 // - Ownership. `lumi::context` holds the `lumi_context *` in a `std::shared_ptr` whose deleter is
-//   `lumi_context_destroy`. Every `luminaire`, `instance` and `target` holds a copy of that
+//   `lumi_context_destroy`. Every `luminaire`, `instance`, `target` and `scene` holds a copy of that
 //   `shared_ptr` next to its 64-bit handle, so the C context is destroyed only after the
 //   `lumi::context` and the last object made from it are all gone, whatever the order of their
 //   destruction. Each destructor calls the matching `lumi_*_destroy` and ignores its status.
@@ -143,6 +144,11 @@ struct instance_kind {
 struct target_kind {
     static void destroy(lumi_context *ctx, uint64_t handle) noexcept {
         (void)lumi_target_destroy(ctx, handle);
+    }
+};
+struct scene_kind {
+    static void destroy(lumi_context *ctx, uint64_t handle) noexcept {
+        (void)lumi_scene_destroy(ctx, handle);
     }
 };
 
@@ -306,9 +312,16 @@ struct capture_camera {
     std::array<double, 3> direction;   ///< Optical axis: unit vector from the camera towards the scene.
 };
 
+/// The illuminance at points of a scene (`lumi_scene_illuminance`), one entry per point.
+struct illuminance_result {
+    std::vector<double> lux;           ///< Illuminance, lux.
+    std::vector<double> std_error_lx;  ///< Standard error of each estimate, lux (0 where exact).
+};
+
 class context;
 class luminaire;
 class target;
+class scene;
 
 /// An instance of a luminaire placed in the world (a `lumi_instance` handle plus a share of its
 /// context). Made by `luminaire::create_instance`; destroyed with `lumi_instance_destroy`.
@@ -520,6 +533,61 @@ private:
     detail::owned_handle<detail::target_kind> h_;
 };
 
+/// A loaded glTF scene (a `lumi_scene` handle plus a share of its context). Made by
+/// `context::load_scene`; drawn once set with `context::set_scene`; destroyed with
+/// `lumi_scene_destroy` (the context then draws no scene if it drew this one).
+class scene {
+public:
+    /// An empty scene (handle 0).
+    scene() noexcept = default;
+
+    /// The C handle (0 when empty).
+    lumi_scene handle() const noexcept { return h_.handle(); }
+    /// The C handle (0 when empty); the same as `handle()`.
+    lumi_scene get() const noexcept { return h_.handle(); }
+    /// True unless empty.
+    explicit operator bool() const noexcept { return !h_.empty(); }
+
+    /// Illuminance (lux) at points of the scene (metres, glTF axes, +Y up) on the side each normal
+    /// faces, from every far-field instance of the context, by the CPU reference path tracer;
+    /// `opts` NULL for `lumi_illuminance_options_default()` (direct light plus inter-reflection).
+    /// `points_m` and `normals` must have the same length, at least 1 (else
+    /// `LUMI_STATUS_INVALID_ARGUMENT`, without calling C). Wraps `lumi_scene_illuminance`.
+    illuminance_result illuminance(const std::vector<std::array<float, 3>> &points_m,
+                                   const std::vector<std::array<float, 3>> &normals,
+                                   const lumi_illuminance_options *opts = nullptr) const {
+        lumi_context *ctx = h_.live_ctx("lumi::scene::illuminance");
+        if (points_m.empty() || points_m.size() != normals.size()) {
+            throw error(LUMI_STATUS_INVALID_ARGUMENT,
+                        "lumi::scene::illuminance: " + std::to_string(points_m.size()) + " points but " +
+                            std::to_string(normals.size()) + " normals");
+        }
+        std::vector<float> p(points_m.size() * 3), n(normals.size() * 3);
+        for (size_t i = 0; i < points_m.size(); ++i) {
+            for (size_t k = 0; k < 3; ++k) {
+                p[3 * i + k] = points_m[i][k];
+                n[3 * i + k] = normals[i][k];
+            }
+        }
+        illuminance_result out{std::vector<double>(points_m.size()), std::vector<double>(points_m.size())};
+        detail::check(lumi_scene_illuminance(ctx, h_.handle(), p.data(), n.data(), points_m.size(), opts,
+                                             out.lux.data(), out.std_error_lx.data()));
+        return out;
+    }
+    /// As above with the options given by value.
+    illuminance_result illuminance(const std::vector<std::array<float, 3>> &points_m,
+                                   const std::vector<std::array<float, 3>> &normals,
+                                   const lumi_illuminance_options &opts) const {
+        return illuminance(points_m, normals, &opts);
+    }
+
+private:
+    friend class context;
+    scene(detail::context_ptr ctx, lumi_scene h) noexcept : h_(std::move(ctx), h) {}
+
+    detail::owned_handle<detail::scene_kind> h_;
+};
+
 /// A lumiview context: a Vulkan device and everything rendered with it. Holds the `lumi_context *`
 /// in a `std::shared_ptr` (deleter `lumi_context_destroy`) shared with every luminaire, instance and
 /// target made from it, so the C context lives until the last of them is gone. Move-only; a
@@ -583,6 +651,30 @@ public:
     }
     /// A target with `lumi_target_desc_default()` (1280 × 720, RGBA32F, R32F depth, exportable).
     [[nodiscard]] target create_target() { return create_target(lumi_target_desc_default()); }
+
+    /// Loads a glTF 2.0 scene (`.glb`, or `.gltf` with its files; metres, +Y up). `path` is UTF-8.
+    /// Wraps `lumi_scene_load`.
+    [[nodiscard]] scene load_scene(const std::string &path) {
+        lumi_scene out = 0;
+        detail::check(lumi_scene_load(live("lumi::context::load_scene"), path.c_str(), &out));
+        return scene(ctx_, out);
+    }
+
+    /// Draws `s` in every later render, lit by this context's far-field instances. Wraps
+    /// `lumi_context_set_scene`; `s` must come from this context.
+    void set_scene(const scene &s) {
+        lumi_context *ctx = live("lumi::context::set_scene");
+        if (!s) detail::throw_empty("lumi::context::set_scene (an empty scene)");
+        detail::check(lumi_context_set_scene(ctx, s.handle()));
+    }
+    /// Draws no scene from the next render on (`lumi_context_set_scene(ctx, 0)`).
+    void clear_scene() { detail::check(lumi_context_set_scene(live("lumi::context::clear_scene"), 0)); }
+
+    /// How the drawn scene is lit (start from `lumi_scene_settings_default()`). Wraps
+    /// `lumi_context_set_scene_settings`.
+    void set_scene_settings(const lumi_scene_settings &settings) {
+        detail::check(lumi_context_set_scene_settings(live("lumi::context::set_scene_settings"), &settings));
+    }
 
     /// Renders every instance of this context into `into`, seen by `camera`; `options` NULL for
     /// `lumi_render_options_default()`. Returns after the GPU finished (unless the target has

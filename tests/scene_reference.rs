@@ -257,6 +257,50 @@ fn an_occluder_casts_an_exact_shadow_and_nothing_else() {
     assert!((top - want).abs() <= 1e-12 * want, "slab top: {top} vs {want}");
 }
 
+/// A hierarchy built once serves tracers with other luminaires (`Tracer::with_bvh`, what the C API's
+/// scene keeps): the same numbers as `Tracer::new`, bit for bit; one built over another scene is
+/// refused, and so is a matrix that scales.
+#[test]
+fn a_prebuilt_hierarchy_traces_like_a_fresh_one() {
+    let scene = lumiview::scene::load(&repo(OFFICE_GLB)).unwrap();
+    let bvh = Arc::new(lumiview::scene::bvh::Bvh::build(&scene));
+    let p = photometry_text(LINEAR_IES, "linear.ies");
+    let points: Vec<SurfacePoint> = [(0.0, 0.0), (0.5, 1.2), (-2.5, 1.5)]
+        .iter()
+        .map(|&(x, z)| up(x, 0.0, z))
+        .collect();
+    let opts = TraceOptions {
+        paths_per_point: 16,
+        ..TraceOptions::default()
+    };
+    for yaw in [0.0, 60.0] {
+        let lum = SceneLuminaire {
+            photometry: p.clone(),
+            scene_from_luminaire: placement(0.2, 2.5, -0.1, yaw),
+        };
+        let fresh = Tracer::new(&scene, std::slice::from_ref(&lum)).unwrap();
+        let shared = Tracer::with_bvh(&scene, bvh.clone(), std::slice::from_ref(&lum)).unwrap();
+        let (a, b) = (
+            fresh.illuminance(&points, &opts).unwrap(),
+            shared.illuminance(&points, &opts).unwrap(),
+        );
+        assert_eq!(a, b, "yaw {yaw}");
+        assert!(
+            a.iter().all(|r| r.total_lx > r.direct_lx) && a[0].direct_lx > 0.0,
+            "{a:?}"
+        );
+    }
+    let other = scene_of(vec![(floor(5.0), 0.3)]);
+    let e = Tracer::with_bvh(&other, bvh.clone(), &[]).unwrap_err().to_string();
+    assert!(e.contains("'bvh'") && e.contains("302 triangles"), "{e}");
+    let scaled = SceneLuminaire {
+        photometry: p,
+        scene_from_luminaire: placement(0.0, 2.5, 0.0, 0.0) * glam::DMat4::from_scale(DVec3::splat(2.0)),
+    };
+    let e = Tracer::with_bvh(&scene, bvh, &[scaled]).unwrap_err().to_string();
+    assert!(e.contains("luminaires[0]") && e.contains("scales or shears"), "{e}");
+}
+
 /// Visible fraction of the luminaire along the floor line z = 0 under a half-plane occluder
 /// (x ≥ 0, at `h_plate` m) for a luminaire at `h` m: E with the plate / E without it.
 fn visible_fraction(p: &Arc<Photometry>, h: f64, h_plate: f64, xs: &[f64], opts: &TraceOptions) -> Vec<f64> {

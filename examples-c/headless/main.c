@@ -1,7 +1,7 @@
 /* lumiview headless example: render a luminaire's appearance, export the image as an opaque fd,
  * import it into this program's own Vulkan device, and check what came through.
  *
- *   headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield]
+ *   headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield] [--scene GLTF]
  *
  * For three views from below the luminaire (perspective cameras 3 m from its photometric centre,
  * looking at it; GL depth range, top-left origin) it checks, and exits non-zero if any fails:
@@ -19,7 +19,15 @@
  * import byte for byte, the centre pixel's luminance against the scan's ground truth (the opaque
  * centre tile, 3,000 cd/m², within 1 %), a neighbouring tile's (1,200 cd/m²), the proxy's depth and an
  * empty corner; then each selection mode (LUMI_SELECTION_*) with the proxy, and the bounding mode
- * without it (drawn, stand-in depth through the capture centre). */
+ * without it (drawn, stand-in depth through the capture centre).
+ *
+ * With --scene, last: a glTF scene (metres, +Y up, open floor around x = z = 0, such as
+ * assets/scenes/office.glb) with the luminaire hung 2.95 m above that floor point, nadir down. It
+ * prints lumi_scene_illuminance (direct, and total with inter-reflection) at three points, and
+ * checks that the direct illuminance below the luminaire is I(0, 0)/h² within 3 % (the point
+ * formula: what an opening up to 0.6 m adds at 2.95 m is less), that the total is at least the direct
+ * light everywhere, and that a render with the scene set draws something lit straight below the
+ * camera. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -68,22 +76,29 @@ static const view VIEWS[] = {{30.0, 40.0}, {0.0, 0.0}, {90.0, 80.0}};
 
 static const view NF_VIEWS[] = {{0.0, 0.0}, {30.0, 40.0}, {200.0, 60.0}};
 
+/* The scene step: the luminaire's photometric centre this high above the floor point (0, 0, 0). */
+#define SCENE_HEIGHT_M 2.95
+#define SCENE_TOLERANCE 0.03
+
 typedef struct options {
     const char *file;
     const char *out_dir;
     double exposure;
     bool validation;
     bool nearfield;
+    const char *scene; /* NULL: no scene step */
 } options;
 
 static void usage(FILE *f) {
     fprintf(f,
-            "usage: headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield]\n"
+            "usage: headless [FILE] [--out DIR] [--exposure E] [--validation] [--no-nearfield] [--scene GLTF]\n"
             "  FILE            IES or EULUMDAT file (default %s)\n"
             "  --out DIR       where the PNGs go (default: the current directory)\n"
             "  --exposure E    tone-mapping exposure for the far-field PNGs in m^2/cd (default 1e-4)\n"
             "  --validation    Vulkan validation on lumiview's device and on ours; any message fails\n"
-            "  --no-nearfield  skip the near-field luminaire (the bundled two-planes scan)\n",
+            "  --no-nearfield  skip the near-field luminaire (the bundled two-planes scan)\n"
+            "  --scene GLTF    also light a glTF scene (metres, +Y up, open floor around x = z = 0, e.g.\n"
+            "                  assets/scenes/office.glb) and print lumi_scene_illuminance in it\n",
             DEFAULT_FILE);
 }
 
@@ -94,6 +109,7 @@ static int parse_args(int argc, char **argv, options *o) {
     o->exposure = 1e-4;
     o->validation = false;
     o->nearfield = true;
+    o->scene = NULL;
     bool have_file = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -114,6 +130,9 @@ static int parse_args(int argc, char **argv, options *o) {
             o->validation = true;
         } else if (strcmp(a, "--no-nearfield") == 0) {
             o->nearfield = false;
+        } else if (strcmp(a, "--scene") == 0 && next) {
+            o->scene = next;
+            i++;
         } else if (a[0] != '-' && !have_file) {
             o->file = a;
             have_file = true;
@@ -472,6 +491,88 @@ done:
     return failed;
 }
 
+/* The scene step (see the top of the file): the far-field instance `inst` is hung in the scene for
+ * it and put back at the origin afterwards. Returns the number of failures. */
+static int run_scene(lumi_context *ctx, lumi_luminaire lum, lumi_instance inst, lumi_target target,
+                     const char *path, float *color) {
+    lumi_scene scene = 0;
+    int failed = 0;
+    if (!lv_lumi_ok(lumi_scene_load(ctx, path, &scene), "lumi_scene_load")) return 1;
+    /* Luminaire frame → scene: X → +X, Y → −Z, Z → +Y (nadir down), centre SCENE_HEIGHT_M up. */
+    const float hung[16] = {1, 0, 0, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, (float)SCENE_HEIGHT_M, 0, 1};
+    float identity[16];
+    lv_mat4_identity(identity);
+    if (!lv_lumi_ok(lumi_instance_set_transform(ctx, inst, hung), "lumi_instance_set_transform")) {
+        failed++;
+        goto done;
+    }
+    /* The floor below the luminaire, the floor 1.2 m beside it, a work plane point above that. */
+    const float points[3][3] = {{0, 0, 0}, {0, 0, 1.2f}, {0, 0.8f, 1.2f}};
+    const float normals[3][3] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}};
+    double direct[3], total[3], total_se[3];
+    lumi_illuminance_options opts = lumi_illuminance_options_default();
+    opts.light = LUMI_ILLUMINANCE_DIRECT;
+    if (!lv_lumi_ok(lumi_scene_illuminance(ctx, scene, &points[0][0], &normals[0][0], 3, &opts, direct, NULL),
+                    "lumi_scene_illuminance") ||
+        !lv_lumi_ok(lumi_scene_illuminance(ctx, scene, &points[0][0], &normals[0][0], 3, NULL, total, total_se),
+                    "lumi_scene_illuminance")) {
+        failed++;
+        goto done;
+    }
+    double cd = 0.0;
+    if (!lv_lumi_ok(lumi_luminaire_sample(ctx, lum, 0.0, 0.0, &cd, NULL), "lumi_luminaire_sample")) {
+        failed++;
+        goto done;
+    }
+    double point_formula = cd / (SCENE_HEIGHT_M * SCENE_HEIGHT_M), rel = rel_err(direct[0], point_formula);
+    for (int k = 0; k < 3; k++) {
+        printf("scene %s: (%g, %g, %g) m, normal +Y: direct %.2f lx, total %.2f ± %.2f lx\n", path, points[k][0],
+               points[k][1], points[k][2], direct[k], total[k], total_se[k]);
+        if (!(total[k] >= direct[k])) {
+            fprintf(stderr, "headless: scene point %d: total %.6g lx below the direct %.6g lx\n", k, total[k],
+                    direct[k]);
+            failed++;
+        }
+    }
+    printf("scene: below the luminaire %.2f lx, I(0, 0)/h² = %.2f lx (%+.2f %%)\n", direct[0], point_formula,
+           rel * 100.0);
+    if (!(fabs(rel) <= SCENE_TOLERANCE)) {
+        fprintf(stderr, "headless: scene: the direct illuminance below the luminaire is off I(0, 0)/h² by more than "
+                        "%.0f %%\n", SCENE_TOLERANCE * 100);
+        failed++;
+    }
+    /* Drawn: looking straight down from 2 m at the floor point (0, 0, 1.2). */
+    lumi_camera cam = lumi_camera_default();
+    if (!lv_mat4_look_at(cam.view, lv_vec3_make(0, 2.0, 1.2), lv_vec3_make(0, 0, 1.2), lv_vec3_make(0, 0, -1))) {
+        failed++;
+        goto done;
+    }
+    lv_mat4_perspective_gl(cam.projection, 40.0, 1.0, 0.1, 10.0);
+    cam.origin = LUMI_ORIGIN_TOP_LEFT;
+    size_t written = 0, c = (size_t)(SIZE / 2) * SIZE + SIZE / 2;
+    if (!lv_lumi_ok(lumi_context_set_scene(ctx, scene), "lumi_context_set_scene") ||
+        !lv_lumi_ok(lumi_render(ctx, target, &cam, NULL), "lumi_render") ||
+        !lv_lumi_ok(lumi_target_read_pixels(ctx, target, LUMI_ATTACHMENT_COLOR, (uint8_t *)color,
+                                            (size_t)SIZE * SIZE * 16, &written),
+                    "lumi_target_read_pixels")) {
+        failed++;
+        goto done;
+    }
+    printf("scene drawn: the floor straight below the camera shows RGB (%.3f, %.3f, %.3f) cd/m², alpha %g\n",
+           color[c * 4], color[c * 4 + 1], color[c * 4 + 2], color[c * 4 + 3]);
+    if (color[c * 4 + 3] != 1.0f || !(color[c * 4 + 1] > 0.0f)) {
+        fprintf(stderr, "headless: scene: nothing lit drawn where the floor is\n");
+        failed++;
+    }
+    if (failed == 0) printf("headless: scene: all checks passed\n");
+
+done:
+    if (!lv_lumi_ok(lumi_context_set_scene(ctx, 0), "lumi_context_set_scene")) failed++;
+    if (!lv_lumi_ok(lumi_instance_set_transform(ctx, inst, identity), "lumi_instance_set_transform")) failed++;
+    if (!lv_lumi_ok(lumi_scene_destroy(ctx, scene), "lumi_scene_destroy")) failed++;
+    return failed;
+}
+
 int main(int argc, char **argv) {
     setvbuf(stdout, NULL, _IOLBF, 0); /* keep stdout and stderr in order in logs */
     options o;
@@ -539,6 +640,7 @@ int main(int argc, char **argv) {
         if (!run_view(ctx, lum, &info, target, &vk, &o, i, color, depth, scratch)) failed++;
     if (failed == 0) printf("headless: all %d views passed\n", (int)(sizeof VIEWS / sizeof VIEWS[0]));
     if (o.nearfield) failed += run_nearfield(ctx, &scan, target, &vk, &o, color, depth, scratch);
+    if (o.scene) failed += run_scene(ctx, lum, inst, target, o.scene, color);
     if (o.validation && (lv_log_errors() || lv_log_warnings() || vk_host_validation_errors())) {
         fprintf(stderr, "headless: validation reported %u lumiview errors, %u warnings, %u Vulkan-host messages\n",
                 lv_log_errors(), lv_log_warnings(), vk_host_validation_errors());

@@ -1,4 +1,4 @@
-//! `lumi_context`: the device, its luminaires, instances and targets.
+//! `lumi_context`: the device, its luminaires, instances, targets and scenes.
 
 use std::collections::BTreeMap;
 use std::ffi::{c_char, c_void, CString};
@@ -61,6 +61,12 @@ pub struct ContextInner {
     pub next_target: u64,
     /// This context's tag, part of every handle it gives out (`ffi::handle`).
     pub tag: u64,
+    /// Scenes by handle ([`super::scene`]).
+    pub scenes: BTreeMap<u64, super::scene::SceneEntry>,
+    /// Serial of the next scene.
+    pub next_scene: u64,
+    /// The handle of the scene `lumi_render` draws, if any (`lumi_context_set_scene`).
+    pub active_scene: Option<u64>,
 }
 
 /// An opaque context. Create with `lumi_context_create`, destroy with `lumi_context_destroy`.
@@ -194,6 +200,9 @@ pub unsafe extern "C" fn lumi_context_create(
                     targets: BTreeMap::new(),
                     next_target: 1,
                     tag: super::handle::new_context_tag(),
+                    scenes: BTreeMap::new(),
+                    next_scene: 1,
+                    active_scene: None,
                 }),
                 poisoned: AtomicBool::new(false),
             });
@@ -204,8 +213,8 @@ pub unsafe extern "C" fn lumi_context_create(
     )
 }
 
-/// Destroys a context and everything it owns (luminaires, instances, targets). Waits for the GPU
-/// (not once a panic has poisoned the context).
+/// Destroys a context and everything it owns (luminaires, instances, targets, scenes). Waits for
+/// the GPU (not once a panic has poisoned the context).
 /// NULL is ignored. Exported fds already handed out stay valid (the host owns them).
 ///
 /// # Safety

@@ -1,9 +1,9 @@
-//! Handles that cannot cross contexts. A `lumi_luminaire`, `lumi_instance` or `lumi_target` is a
-//! 64-bit value: the context's tag (bits 40–63, unique per context created in the process, 1 …
-//! 2²⁴ − 1, then reused), the kind (bits 36–39: 1 luminaire, 2 instance, 3 target) and a serial
-//! (bits 0–35) that a context never hands out twice, so a destroyed object's handle stays invalid.
-//! 0 is never a handle. A handle of another context, of another kind, or of an object destroyed
-//! is `LUMI_STATUS_INVALID_ARGUMENT` naming the argument.
+//! Handles that cannot cross contexts. A `lumi_luminaire`, `lumi_instance`, `lumi_target` or
+//! `lumi_scene` is a 64-bit value: the context's tag (bits 40–63, unique per context created in the
+//! process, 1 … 2²⁴ − 1, then reused), the kind (bits 36–39: 1 luminaire, 2 instance, 3 target,
+//! 4 scene) and a serial (bits 0–35) that a context never hands out twice, so a destroyed object's
+//! handle stays invalid. 0 is never a handle. A handle of another context, of another kind, or of
+//! an object destroyed is `LUMI_STATUS_INVALID_ARGUMENT` naming the argument.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -18,6 +18,8 @@ pub(crate) enum Kind {
     Instance = 2,
     /// `lumi_target`.
     Target = 3,
+    /// `lumi_scene`.
+    Scene = 4,
 }
 
 impl Kind {
@@ -26,6 +28,7 @@ impl Kind {
             1 => Some("luminaire"),
             2 => Some("instance"),
             3 => Some("target"),
+            4 => Some("scene"),
             _ => None,
         }
     }
@@ -98,6 +101,14 @@ mod tests {
             e.message
         );
         assert!(decode(a, Kind::Target, 0, "target").is_err());
+        let s = encode(a, Kind::Scene, 3);
+        assert_eq!(decode(a, Kind::Scene, s, "scene").unwrap(), 3);
+        let e = decode(a, Kind::Target, s, "target").unwrap_err();
+        assert!(
+            e.message.contains("is a scene handle, not a target handle"),
+            "{}",
+            e.message
+        );
         assert!(decode(a, Kind::Target, 5, "target")
             .unwrap_err()
             .message

@@ -8,13 +8,16 @@
 //!   `LUMI_STATUS_PANIC` and poisons the context it happened in.
 //! - Enums arrive as `uint32_t` and are converted with `TryFrom`; an unknown value is
 //!   `LUMI_STATUS_INVALID_ARGUMENT`.
-//! - Luminaires, instances and targets are `uint64_t` handles owned by their context: a stale or
-//!   foreign handle is an error, never undefined behaviour; destroying the context frees them all.
+//! - Luminaires, instances, targets and scenes are `uint64_t` handles owned by their context: a
+//!   stale or foreign handle is an error, never undefined behaviour; destroying the context frees
+//!   them all.
 //!
 //! One file per C object: [`context`] (contexts, devices, logging), [`luminaire`] (loading and
 //! querying luminaires), [`lut`] (host-lighting look-up tables), [`instance`] (instances, their
 //! near-field settings and illuminance), [`target`] (render targets, export, read-back),
-//! [`render`] (the camera, render options, `lumi_render`); `handle` encodes the handles.
+//! [`render`] (the camera, render options, `lumi_render`), [`scene`] (glTF scenes: loading, the
+//! scene drawn and its lighting settings, illuminance by the reference path tracer); `handle`
+//! encodes the handles.
 
 #![allow(non_camel_case_types)]
 
@@ -24,6 +27,7 @@ pub mod instance;
 pub mod luminaire;
 pub mod lut;
 pub mod render;
+pub mod scene;
 pub mod target;
 
 use std::cell::RefCell;

@@ -181,6 +181,11 @@ impl Renderer {
         Ok(())
     }
 
+    /// Every instance as (id, luminaire, model matrix), in id order.
+    pub fn instances(&self) -> impl Iterator<Item = (InstanceId, LuminaireId, Mat4)> + '_ {
+        self.instances.iter().map(|(id, i)| (*id, i.luminaire, i.model))
+    }
+
     /// An instance's luminaire and model matrix.
     pub fn instance(&self, id: InstanceId) -> Result<(LuminaireId, Mat4), GpuError> {
         self.instances
@@ -226,7 +231,18 @@ impl Renderer {
     /// Loads a scene for the scene lighting pass (replacing any earlier one): from then on every
     /// frame draws it lit by every far-field instance, before the luminaires' own appearance.
     pub fn set_scene(&mut self, scene: &crate::scene::Scene) -> Result<(), GpuError> {
-        self.scene.set_scene(&self.ctx, scene)
+        self.scene.set_scene(&self.ctx, Arc::new(scene.clone()), None)
+    }
+
+    /// [`Renderer::set_scene`] sharing the caller's scene and, when it has one, its ray-query
+    /// hierarchy (photons for inter-reflection are traced through it; built on first use
+    /// otherwise).
+    pub fn set_scene_shared(
+        &mut self,
+        scene: Arc<crate::scene::Scene>,
+        bvh: Option<Arc<crate::scene::bvh::Bvh>>,
+    ) -> Result<(), GpuError> {
+        self.scene.set_scene(&self.ctx, scene, bvh)
     }
 
     /// Removes the scene.

@@ -174,6 +174,11 @@ impl Bvh {
         self.nodes.len()
     }
 
+    /// Number of triangles (the scene's, every one of them, degenerate ones included).
+    pub fn triangle_count(&self) -> usize {
+        self.ids.len()
+    }
+
     /// The closest triangle hit by the ray `origin + t dir`, 0 < t < `t_max`.
     pub fn closest_hit(&self, origin: DVec3, dir: DVec3, t_max: f64) -> Option<Hit> {
         let inv = safe_recip(dir);

@@ -45,6 +45,36 @@ pub struct SceneLuminaire {
     pub scene_from_luminaire: DMat4,
 }
 
+impl SceneLuminaire {
+    /// Checks that the model matrix is what the tracer can use: finite, affine, a rotation
+    /// (columns orthonormal within 10⁻⁶, no scale or shear) that does not mirror, and a
+    /// translation.
+    ///
+    /// Errors: why it is not, as text.
+    pub fn check_placement(&self) -> std::result::Result<(), &'static str> {
+        let m = self.scene_from_luminaire;
+        if !m.is_finite() {
+            return Err("the model matrix is not finite");
+        }
+        if m.row(3) != glam::DVec4::W {
+            return Err("the model matrix is not affine (last row is not 0, 0, 0, 1)");
+        }
+        let r = DMat3::from_mat4(m);
+        let gram = r.transpose() * r;
+        let off = (gram - DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f64, |a, x| a.max(x.abs()));
+        if off > 1e-6 {
+            return Err("the model matrix scales or shears; it must be a rotation and a translation");
+        }
+        if r.determinant() < 0.0 {
+            return Err("the model matrix mirrors; it must be a rotation and a translation");
+        }
+        Ok(())
+    }
+}
+
 /// A flat emitting piece: centre + s·a + t·b for (s, t) in the unit square [−1, 1]² (a
 /// parallelogram) or the unit disc (an ellipse), in the luminaire frame.
 #[derive(Debug, Clone, Copy)]
@@ -332,28 +362,10 @@ impl Emitter {
             .iter()
             .enumerate()
             .map(|(i, l)| {
+                l.check_placement()
+                    .map_err(|why| SceneError::invalid(format!("luminaires[{i}]"), why))?;
                 let m = l.scene_from_luminaire;
-                let bad = |why: &str| SceneError::invalid(format!("luminaires[{i}]"), why.to_string());
-                if !m.is_finite() {
-                    return Err(bad("the model matrix is not finite"));
-                }
-                if m.row(3) != glam::DVec4::W {
-                    return Err(bad("the model matrix is not affine (last row is not 0, 0, 0, 1)"));
-                }
                 let r = DMat3::from_mat4(m);
-                let gram = r.transpose() * r;
-                let off = (gram - DMat3::IDENTITY)
-                    .to_cols_array()
-                    .iter()
-                    .fold(0.0f64, |a, x| a.max(x.abs()));
-                if off > 1e-6 {
-                    return Err(bad(
-                        "the model matrix scales or shears; it must be a rotation and a translation",
-                    ));
-                }
-                if r.determinant() < 0.0 {
-                    return Err(bad("the model matrix mirrors; it must be a rotation and a translation"));
-                }
                 Ok(Emitter {
                     photometry: l.photometry.clone(),
                     scene_from_luminaire: m,

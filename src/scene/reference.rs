@@ -1,5 +1,6 @@
 //! The reference: a CPU path tracer for illuminance in diffuse scenes lit by photometric luminaires,
-//! with the light split by bounce. For tests and evaluation, not for frames.
+//! with the light split by bounce. For tests, evaluation and the C API's illuminance queries
+//! (`lumi_scene_illuminance`), not for frames.
 //!
 //! # What it computes
 //! The illuminance E (lx) at calculation points, each a position and the unit normal of the
@@ -26,6 +27,8 @@
 //!   deviations of the D direct estimates and the P paths' indirect sums.
 //! - Deterministic: point i draws from `Pcg32::for_point(seed, i)`, so results do not depend on
 //!   the number of threads (rayon, one task per point).
+
+use std::sync::Arc;
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -105,11 +108,12 @@ impl PerBounce {
     }
 }
 
-/// A scene with its hierarchy and luminaires, ready for many queries.
+/// A scene with its hierarchy and luminaires, ready for many queries. The hierarchy is shared
+/// ([`Arc`]), so one built once serves tracers with different luminaires ([`Tracer::with_bvh`]).
 #[derive(Debug, Clone)]
 pub struct Tracer<'s> {
     scene: &'s Scene,
-    bvh: Bvh,
+    bvh: Arc<Bvh>,
     emitters: Vec<Emitter>,
     offset_m: f64,
 }
@@ -120,9 +124,34 @@ impl<'s> Tracer<'s> {
     /// Errors: a luminaire's matrix that is not a rotation and translation (argument
     /// `luminaires[i]`).
     pub fn new(scene: &'s Scene, luminaires: &[SceneLuminaire]) -> Result<Self> {
+        let emitters = Emitter::prepare(luminaires)?;
         Ok(Tracer {
             scene,
-            bvh: Bvh::build(scene),
+            bvh: Arc::new(Bvh::build(scene)),
+            emitters,
+            offset_m: offset_m(&scene.bounds()),
+        })
+    }
+
+    /// Prepares the luminaires over a hierarchy already built from `scene` with [`Bvh::build`]
+    /// (kept and reused, e.g. by a scene loaded once and queried with different luminaires).
+    ///
+    /// Errors: a hierarchy over another number of triangles than `scene` has (argument `bvh`);
+    /// those of [`Tracer::new`].
+    pub fn with_bvh(scene: &'s Scene, bvh: Arc<Bvh>, luminaires: &[SceneLuminaire]) -> Result<Self> {
+        if bvh.triangle_count() != scene.triangles().len() {
+            return Err(SceneError::invalid(
+                "bvh",
+                format!(
+                    "built over {} triangles, the scene has {}: build it from this scene",
+                    bvh.triangle_count(),
+                    scene.triangles().len()
+                ),
+            ));
+        }
+        Ok(Tracer {
+            scene,
+            bvh,
             emitters: Emitter::prepare(luminaires)?,
             offset_m: offset_m(&scene.bounds()),
         })

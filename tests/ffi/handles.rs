@@ -8,6 +8,7 @@ use lumiview::ffi::instance::*;
 use lumiview::ffi::luminaire::*;
 use lumiview::ffi::lut::*;
 use lumiview::ffi::render::*;
+use lumiview::ffi::scene::*;
 use lumiview::ffi::target::*;
 use lumiview::ffi::*;
 
@@ -52,10 +53,20 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
             last_error()
         );
         assert_eq!(lumi_target_create(b, &tdesc, &mut tgt_b), LUMI_STATUS_OK);
+        let office = std::ffi::CString::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/office.glb")).unwrap();
+        let (mut scene_a, mut scene_b) = (0, 0);
+        assert_eq!(lumi_scene_load(a, office.as_ptr(), &mut scene_a), LUMI_STATUS_OK);
+        assert_eq!(lumi_scene_load(b, office.as_ptr(), &mut scene_b), LUMI_STATUS_OK);
+        assert_ne!(scene_a, scene_b);
+        assert_eq!(lumi_context_set_scene(b, scene_b), LUMI_STATUS_OK);
 
         // Every function that takes a handle, called on context `a` with `handle`: its status, and
         // whether its out-parameter was left alone.
-        let calls = |lum: lumi_luminaire, inst: lumi_instance, tgt: lumi_target| -> Vec<(&str, lumi_status, bool)> {
+        let calls = |lum: lumi_luminaire,
+                     inst: lumi_instance,
+                     tgt: lumi_target,
+                     scene: lumi_scene|
+         -> Vec<(&str, lumi_status, bool)> {
             let mut v = Vec::new();
             let mut info: lumi_luminaire_info = std::mem::zeroed();
             info.flux_lm = -7.0;
@@ -128,13 +139,30 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
                 lumi_target_export_semaphores(a, tgt, &mut f1, &mut f2),
                 f1 == -7 && f2 == -7,
             ));
+            let (mut lux, up) = ([-7.0], [0.0f32, 1.0, 0.0]);
+            v.push((
+                "lumi_scene_illuminance",
+                lumi_scene_illuminance(
+                    a,
+                    scene,
+                    p.as_ptr(),
+                    up.as_ptr(),
+                    1,
+                    ptr::null(),
+                    lux.as_mut_ptr(),
+                    ptr::null_mut(),
+                ),
+                lux[0] == -7.0,
+            ));
+            v.push(("lumi_context_set_scene", lumi_context_set_scene(a, scene), true));
+            v.push(("lumi_scene_destroy", lumi_scene_destroy(a, scene), true));
             v.push(("lumi_instance_destroy", lumi_instance_destroy(a, inst), true));
             v.push(("lumi_target_destroy", lumi_target_destroy(a, tgt), true));
             v.push(("lumi_luminaire_destroy", lumi_luminaire_destroy(a, lum), true));
             v
         };
-        let check = |what: &str, lum, inst, tgt, want: &str| {
-            for (name, status, untouched) in calls(lum, inst, tgt) {
+        let check = |what: &str, lum, inst, tgt, scene, want: &str| {
+            for (name, status, untouched) in calls(lum, inst, tgt, scene) {
                 assert_eq!(
                     status,
                     LUMI_STATUS_INVALID_ARGUMENT,
@@ -150,11 +178,11 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
             }
         };
         // Context b's handles on context a.
-        check("foreign", lum_b, inst_b, tgt_b, "belongs to another context");
+        check("foreign", lum_b, inst_b, tgt_b, scene_b, "belongs to another context");
         // Handles of the wrong kind.
-        check("wrong kind", inst_a, tgt_a, lum_a, "handle, not a");
+        check("wrong kind", inst_a, tgt_a, scene_a, lum_a, "handle, not a");
         // Made-up values.
-        check("made up", 5, 6, 7, "not a lumiview handle");
+        check("made up", 5, 6, 7, 8, "not a lumiview handle");
 
         // Nothing happened to b: its luminaire, instance and target all work.
         let mut info: lumi_luminaire_info = std::mem::zeroed();
@@ -166,6 +194,23 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
             LUMI_STATUS_OK
         );
         assert!(lux > 0.0);
+        let (mut lux, wall, towards) = ([0.0], [0.0f32, 0.5, -1.5], [0.0f32, 0.0, 1.0]);
+        assert_eq!(
+            lumi_scene_illuminance(
+                b,
+                scene_b,
+                wall.as_ptr(),
+                towards.as_ptr(),
+                1,
+                ptr::null(),
+                lux.as_mut_ptr(),
+                ptr::null_mut()
+            ),
+            LUMI_STATUS_OK,
+            "{}",
+            last_error()
+        );
+        assert!(lux[0] > 0.0, "b's instance lights b's scene");
         let cam = lumi_camera_default();
         assert_eq!(
             lumi_render(b, tgt_b, &cam, ptr::null()),
@@ -178,10 +223,14 @@ fn handles_never_cross_contexts_kinds_or_lifetimes() {
         assert_eq!(lumi_instance_destroy(a, inst_a), LUMI_STATUS_OK);
         assert_eq!(lumi_target_destroy(a, tgt_a), LUMI_STATUS_OK);
         assert_eq!(lumi_luminaire_destroy(a, lum_a), LUMI_STATUS_OK);
+        assert_eq!(lumi_scene_destroy(a, scene_a), LUMI_STATUS_OK);
         let mut again = 0;
         assert_eq!(lumi_luminaire_load(a, file.as_ptr(), &mut again), LUMI_STATUS_OK);
         assert_ne!(again, lum_a);
-        check("stale", lum_a, inst_a, tgt_a, "(destroyed");
+        let mut again = 0;
+        assert_eq!(lumi_scene_load(a, office.as_ptr(), &mut again), LUMI_STATUS_OK);
+        assert_ne!(again, scene_a);
+        check("stale", lum_a, inst_a, tgt_a, scene_a, "(destroyed");
         lumi_context_destroy(a);
         lumi_context_destroy(b);
     }

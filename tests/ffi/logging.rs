@@ -1,11 +1,12 @@
-//! Load warnings (a file that parses but is implausible, a scan with a finding) reach the host's log
-//! callback through the C API.
+//! Load warnings (a file that parses but is implausible, a scan with a finding, a scene with a
+//! doubtful primitive) reach the host's log callback through the C API.
 
 use std::ffi::{c_char, CStr};
 use std::ptr;
 
 use lumiview::ffi::context::*;
 use lumiview::ffi::luminaire::*;
+use lumiview::ffi::scene::*;
 use lumiview::ffi::*;
 
 use crate::common::{cpath, cstr, last_error, temp_dir};
@@ -74,7 +75,43 @@ fn load_warnings_reach_the_log_callback() {
         );
         let w = warnings("outlier-ray.tm25ray");
         assert!(w.iter().any(|m| m.contains("outlier")), "{w:?}");
+
+        // A scene whose one triangle has no material: glTF's default (white), with a warning.
+        let scene_path = dir.join("no-material.glb");
+        std::fs::write(&scene_path, triangle_without_material()).unwrap();
+        let mut scene: lumi_scene = 0;
+        assert_eq!(
+            lumi_scene_load(ctx, cstr(&scene_path).as_ptr(), &mut scene),
+            LUMI_STATUS_OK,
+            "{}",
+            last_error()
+        );
+        let w = warnings("no-material.glb");
+        assert!(w.iter().any(|m| m.contains("no material")), "{w:?}");
         lumi_context_destroy(ctx);
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// A GLB of one triangle whose primitive names no material.
+fn triangle_without_material() -> Vec<u8> {
+    use lumiview::draw::glb::{Buffer, ARRAY_BUFFER};
+    let mut buf = Buffer::new();
+    let pos: Vec<u8> = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let view = buf.push_view(&pos, ARRAY_BUFFER);
+    let doc = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+        "accessors": [{"bufferView": view, "componentType": 5126, "count": 3, "type": "VEC3",
+            "min": [0.0, 0.0, 0.0], "max": [1.0, 0.0, 1.0]}],
+        "bufferViews": buf.views(),
+        "buffers": [{"byteLength": buf.len()}],
+    });
+    buf.into_glb(&doc).unwrap()
 }

@@ -9,6 +9,7 @@
 //! - `lifecycle.rs`: versions, NULLs and an ABI mismatch without a device, lifecycle errors, a render;
 //! - `logging.rs`: load warnings reach the host's log callback;
 //! - `nearfield.rs`: near-field scans loaded, rendered and queried through the C API;
+//! - `scene.rs`: glTF scenes loaded, drawn and queried for illuminance through the C API;
 //! - `handles.rs`: handles never cross contexts, kinds or lifetimes.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -21,3 +22,4 @@ mod handles;
 mod lifecycle;
 mod logging;
 mod nearfield;
+mod scene;

@@ -464,11 +464,13 @@ impl ScenePass {
         })
     }
 
-    /// Uploads `scene` (replacing any earlier one).
+    /// Uploads `scene` (replacing any earlier one) and keeps it, with its hierarchy `bvh` if given
+    /// (photons for inter-reflection are traced through them; the hierarchy is built on first use
+    /// otherwise).
     ///
     /// Errors: `InvalidArgument` (`Arg::Scene`) for a scene with no triangles or one whose vertices
     /// do not fit the device's largest buffer; what creating the buffer reports.
-    pub fn set_scene(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<(), GpuError> {
+    pub fn set_scene(&mut self, ctx: &GpuContext, scene: Arc<Scene>, bvh: Option<Arc<Bvh>>) -> Result<(), GpuError> {
         let bytes = scene.triangles().len() as u64 * 3 * (VERTEX_FLOATS as u64) * 4;
         if bytes == 0 {
             return Err(GpuError::invalid(Arg::Scene, "the scene has no triangles"));
@@ -483,7 +485,7 @@ impl ScenePass {
                 ),
             ));
         }
-        let vertices = scene_vertices(scene);
+        let vertices = scene_vertices(&scene);
         let buf = ctx.scoped("uploading a scene", || {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("scene vertices"),
@@ -502,7 +504,7 @@ impl ScenePass {
         });
         self.shadows = None;
         self.vpls = None;
-        self.cpu = Some((Arc::new(scene.clone()), None));
+        self.cpu = Some((scene, bvh));
         Ok(())
     }
 
