@@ -245,6 +245,12 @@ impl Renderer {
         self.scene.set_scene(&self.ctx, scene, bvh)
     }
 
+    /// What the scene pass used for its last frame: luminaires, virtual point lights, shadow
+    /// face size, and how often shadows and VPLs were made.
+    pub fn scene_stats(&self) -> crate::gpu::scene::SceneStats {
+        self.scene.stats()
+    }
+
     /// Removes the scene.
     pub fn clear_scene(&mut self) {
         self.scene.clear_scene();

@@ -238,6 +238,21 @@ struct ShadowCache {
     view: wgpu::TextureView,
 }
 
+/// What the scene pass used for its last frame (for benchmarks and reports).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct SceneStats {
+    /// Luminaires lighting the scene.
+    pub luminaires: usize,
+    /// Virtual point lights gathered per pixel (0: no inter-reflection).
+    pub vpls: u32,
+    /// Side of each shadow cube face, pixels (0: no shadows).
+    pub shadow_face_px: u32,
+    /// Times the shadow maps were rendered since the pass was made.
+    pub shadow_renders: u64,
+    /// Times the virtual point lights were made since the pass was made.
+    pub vpl_generations: u64,
+}
+
 /// One virtual point light as the shader reads it (`Vpl` in shaders/scene/lighting.wgsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -293,6 +308,7 @@ pub struct ScenePass {
     vpls: Option<VplCache>,
     /// A one-VPL zero buffer bound when there is no inter-reflection.
     no_vpls: wgpu::Buffer,
+    stats: SceneStats,
 }
 
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
@@ -460,6 +476,7 @@ impl ScenePass {
                 emission: Vec::new(),
                 vpls: None,
                 no_vpls: storage_buffer(ctx, "no VPLs", bytemuck::bytes_of(&VplRecord::zeroed())),
+                stats: SceneStats::default(),
             })
         })
     }
@@ -610,6 +627,7 @@ impl ScenePass {
         let buffer = ctx.scoped("uploading virtual point lights", || {
             Ok(storage_buffer(ctx, "scene VPLs", bytemuck::cast_slice(&records)))
         })?;
+        self.stats.vpl_generations += 1;
         self.vpls = Some(VplCache {
             key,
             buffer,
@@ -617,6 +635,11 @@ impl ScenePass {
             _photometries: instances.iter().map(|(l, _)| l.photometry.clone()).collect(),
         });
         Ok(count)
+    }
+
+    /// What the last frame used.
+    pub fn stats(&self) -> SceneStats {
+        self.stats
     }
 
     /// Whether a scene is loaded.
@@ -799,6 +822,7 @@ impl ScenePass {
             ctx.queue.submit([enc.finish()]);
             Ok(view)
         })?;
+        self.stats.shadow_renders += 1;
         self.shadows = Some(ShadowCache { key, view });
         Ok(())
     }
@@ -913,6 +937,9 @@ impl Pass for ScenePass {
             ));
         }
         let vpl_count = self.virtual_lights(ctx, instances)?;
+        self.stats.luminaires = records.len();
+        self.stats.vpls = vpl_count;
+        self.stats.shadow_face_px = layout.map_or(0, |l| l.face_px);
         let options = view.options();
         let uniform = SceneFrameUniform {
             clip_from_world: clip_from_world.to_cols_array_2d(),

@@ -561,8 +561,9 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
             ", no inter-reflection".to_string()
         } else {
             format!(
-                " + inter-reflection from {} photons (virtual point lights, every bounce)",
-                settings.bounce_photons
+                " + inter-reflection from {} photons ({} virtual point lights, every bounce)",
+                settings.bounce_photons,
+                r.scene_stats().vpls
             )
         },
         if exr {
