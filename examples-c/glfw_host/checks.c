@@ -79,10 +79,15 @@ static bool check_footprint(const room *r, int pendant, const gl_imported *color
         lv_vec3 local = l >= w ? lv_vec3_make(f * l, 0, 0) : lv_vec3_make(0, f * w, 0), world, ndc;
         if (!lv_mat4_transform_point(model, local, &world) || !lv_mat4_transform_point(view_proj, world, &ndc))
             return false;
-        px[k][0] = (int)floor((ndc.x * 0.5 + 0.5) * width);
-        px[k][1] = (int)floor((ndc.y * 0.5 + 0.5) * height); /* GL row, from the bottom */
         want[k] = window_depth(view_proj, world);
         got[k] = 1.0;
+        px[k][0] = px[k][1] = -1;
+        if (!(fabs(ndc.x) < 1.0 && fabs(ndc.y) < 1.0)) { /* off screen (and no int overflow below) */
+            ok = false;
+            continue;
+        }
+        px[k][0] = (int)floor((ndc.x * 0.5 + 0.5) * width);
+        px[k][1] = (int)floor((ndc.y * 0.5 + 0.5) * height); /* GL row, from the bottom */
         if (px[k][0] < 0 || px[k][0] >= width || px[k][1] < 0 || px[k][1] >= height) {
             ok = false;
             continue;
@@ -90,7 +95,7 @@ static bool check_footprint(const room *r, int pendant, const gl_imported *color
         float rgba[4] = {0, 0, 0, 0}, d = 1.0f;
         if (!read_lumiview(color, depth, px[k][0], px[k][1], rgba, &d)) return false;
         got[k] = d;
-        /* The opening is 2 cm thin at most; the room behind it is ≥ 0.5 m farther (1e-4 ≈ 2 cm at 3 m). */
+        /* The opening's own depth, not the room's metres behind it (1e-4 is about 2 cm at 3 m). */
         if (!(fabs(got[k] - want[k]) <= 1e-4)) ok = false;
     }
     printf("footprint: opening points at pixels %d,%d and %d,%d (from the top-left): lumiview depth %.6f, %.6f, "
