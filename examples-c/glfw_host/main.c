@@ -46,7 +46,7 @@
  * north-east corner, the near-field luminaire on its stand by the east wall. */
 #define DEFAULT_EYE lv_vec3_make(-2.85, 1.65, 1.9)
 #define DEFAULT_TARGET lv_vec3_make(0.8, 1.15, -0.9)
-#define DEFAULT_EXPOSURE 0.02
+#define DEFAULT_EXPOSURE 0.016
 
 typedef struct options {
     const char *file, *scene;
