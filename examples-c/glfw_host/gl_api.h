@@ -65,6 +65,7 @@ typedef void(LV_GLAPIENTRY *GLDEBUGPROC)(GLenum source, GLenum type, GLuint id, 
 #define GL_CLAMP_TO_EDGE 0x812F
 #define GL_DEPTH_BUFFER_BIT 0x00000100
 #define GL_COLOR_BUFFER_BIT 0x00004000
+#define GL_DYNAMIC_STORAGE_BIT 0x0100
 #define GL_MAJOR_VERSION 0x821B
 #define GL_MINOR_VERSION 0x821C
 #define GL_NUM_EXTENSIONS 0x821D
@@ -107,7 +108,6 @@ typedef void(LV_GLAPIENTRY *GLDEBUGPROC)(GLenum source, GLenum type, GLuint id, 
     X(const GLubyte *, glGetStringi, (GLenum name, GLuint index))                                            \
     X(void, glGetIntegerv, (GLenum pname, GLint * data))                                                     \
     X(void, glEnable, (GLenum cap))                                                                          \
-    X(void, glDisable, (GLenum cap))                                                                         \
     X(void, glDepthFunc, (GLenum func))                                                                      \
     X(void, glDepthMask, (GLboolean flag))                                                                   \
     X(void, glClearColor, (GLfloat r, GLfloat g, GLfloat b, GLfloat a))                                      \
@@ -134,16 +134,12 @@ typedef void(LV_GLAPIENTRY *GLDEBUGPROC)(GLenum source, GLenum type, GLuint id, 
     X(void, glDeleteProgram, (GLuint program))                                                               \
     X(void, glUseProgram, (GLuint program))                                                                  \
     X(GLint, glGetUniformLocation, (GLuint program, const GLchar *name))                                     \
-    X(void, glProgramUniform1i, (GLuint program, GLint location, GLint v0))                                  \
     X(void, glProgramUniform1f, (GLuint program, GLint location, GLfloat v0))                                \
-    X(void, glProgramUniform2f, (GLuint program, GLint location, GLfloat v0, GLfloat v1))                    \
-    X(void, glProgramUniform3f, (GLuint program, GLint location, GLfloat v0, GLfloat v1, GLfloat v2))        \
-    X(void, glProgramUniformMatrix3fv,                                                                       \
-      (GLuint program, GLint location, GLsizei count, GLboolean transpose, const GLfloat *value))            \
     X(void, glProgramUniformMatrix4fv,                                                                       \
       (GLuint program, GLint location, GLsizei count, GLboolean transpose, const GLfloat *value))            \
     X(void, glCreateBuffers, (GLsizei n, GLuint * buffers))                                                  \
     X(void, glNamedBufferStorage, (GLuint buffer, GLsizeiptr size, const void *data, GLbitfield flags))      \
+    X(void, glNamedBufferSubData, (GLuint buffer, GLintptr offset, GLsizeiptr size, const void *data))       \
     X(void, glDeleteBuffers, (GLsizei n, const GLuint *buffers))                                             \
     X(void, glCreateVertexArrays, (GLsizei n, GLuint * arrays))                                              \
     X(void, glDeleteVertexArrays, (GLsizei n, const GLuint *arrays))                                         \
@@ -157,19 +153,11 @@ typedef void(LV_GLAPIENTRY *GLDEBUGPROC)(GLenum source, GLenum type, GLuint id, 
     X(void, glDrawArrays, (GLenum mode, GLint first, GLsizei count))                                         \
     X(void, glCreateTextures, (GLenum target, GLsizei n, GLuint * textures))                                 \
     X(void, glDeleteTextures, (GLsizei n, const GLuint *textures))                                           \
-    X(void, glTextureStorage2D, (GLuint texture, GLsizei levels, GLenum format, GLsizei w, GLsizei h))       \
-    X(void, glTextureSubImage2D,                                                                             \
-      (GLuint texture, GLint level, GLint x, GLint y, GLsizei w, GLsizei h, GLenum format, GLenum type,      \
-       const void *pixels))                                                                                  \
     X(void, glGetTextureSubImage,                                                                            \
       (GLuint texture, GLint level, GLint x, GLint y, GLint z, GLsizei w, GLsizei h, GLsizei d,              \
        GLenum format, GLenum type, GLsizei size, void *pixels))                                              \
     X(void, glTextureParameteri, (GLuint texture, GLenum pname, GLint param))                                \
     X(void, glBindTextureUnit, (GLuint unit, GLuint texture))                                                \
-    X(void, glCreateFramebuffers, (GLsizei n, GLuint * framebuffers))                                        \
-    X(void, glDeleteFramebuffers, (GLsizei n, const GLuint *framebuffers))                                   \
-    X(void, glNamedFramebufferTexture, (GLuint framebuffer, GLenum attachment, GLuint texture, GLint level))  \
-    X(GLenum, glCheckNamedFramebufferStatus, (GLuint framebuffer, GLenum target))                            \
     X(void, glBindFramebuffer, (GLenum target, GLuint framebuffer))                                          \
     X(void, glGetUnsignedBytevEXT, (GLenum pname, GLubyte * data))                                           \
     X(void, glGetUnsignedBytei_vEXT, (GLenum target, GLuint index, GLubyte * data))                          \
@@ -192,7 +180,6 @@ LV_GL_FUNCTIONS(LV_GL_DECLARE)
 #define glGetStringi lv_glGetStringi
 #define glGetIntegerv lv_glGetIntegerv
 #define glEnable lv_glEnable
-#define glDisable lv_glDisable
 #define glDepthFunc lv_glDepthFunc
 #define glDepthMask lv_glDepthMask
 #define glClearColor lv_glClearColor
@@ -219,14 +206,11 @@ LV_GL_FUNCTIONS(LV_GL_DECLARE)
 #define glDeleteProgram lv_glDeleteProgram
 #define glUseProgram lv_glUseProgram
 #define glGetUniformLocation lv_glGetUniformLocation
-#define glProgramUniform1i lv_glProgramUniform1i
 #define glProgramUniform1f lv_glProgramUniform1f
-#define glProgramUniform2f lv_glProgramUniform2f
-#define glProgramUniform3f lv_glProgramUniform3f
-#define glProgramUniformMatrix3fv lv_glProgramUniformMatrix3fv
 #define glProgramUniformMatrix4fv lv_glProgramUniformMatrix4fv
 #define glCreateBuffers lv_glCreateBuffers
 #define glNamedBufferStorage lv_glNamedBufferStorage
+#define glNamedBufferSubData lv_glNamedBufferSubData
 #define glDeleteBuffers lv_glDeleteBuffers
 #define glCreateVertexArrays lv_glCreateVertexArrays
 #define glDeleteVertexArrays lv_glDeleteVertexArrays
@@ -238,15 +222,9 @@ LV_GL_FUNCTIONS(LV_GL_DECLARE)
 #define glDrawArrays lv_glDrawArrays
 #define glCreateTextures lv_glCreateTextures
 #define glDeleteTextures lv_glDeleteTextures
-#define glTextureStorage2D lv_glTextureStorage2D
-#define glTextureSubImage2D lv_glTextureSubImage2D
 #define glGetTextureSubImage lv_glGetTextureSubImage
 #define glTextureParameteri lv_glTextureParameteri
 #define glBindTextureUnit lv_glBindTextureUnit
-#define glCreateFramebuffers lv_glCreateFramebuffers
-#define glDeleteFramebuffers lv_glDeleteFramebuffers
-#define glNamedFramebufferTexture lv_glNamedFramebufferTexture
-#define glCheckNamedFramebufferStatus lv_glCheckNamedFramebufferStatus
 #define glBindFramebuffer lv_glBindFramebuffer
 #define glGetUnsignedBytevEXT lv_glGetUnsignedBytevEXT
 #define glGetUnsignedBytei_vEXT lv_glGetUnsignedBytei_vEXT

@@ -1,17 +1,16 @@
 /* lumiview GLFW host: an OpenGL 4.5 application that imports lumiview's images once through
- * GL_EXT_memory_object_fd and, every frame, renders the luminaires' appearance with lumiview (the
- * host's camera), draws a room lit by the far-field luminaire's photometry from its look-up table,
- * and composites the two by depth. Besides the far-field luminaire hangs a near-field one: a scan
- * (by default the bundled synthetic two-planes scan, generated on first run, lv_scan.h) on a stand,
- * loaded through the same lumi_luminaire_load_ex call. See examples-c/README.md for the flags and
- * what each check proves.
+ * GL_EXT_memory_object_fd and, every frame, has lumiview draw a lit room with the host's camera — a
+ * glTF scene (lumi_scene_load, default the shipped office) lit by six pendants of a photometric file
+ * with shadows and inter-reflection, the pendants' own appearance, and a near-field luminaire (a
+ * scan, by default the bundled synthetic two-planes scan, generated on first run, lv_scan.h) on a
+ * stand — then draws its own objects in GL (the stand) and composites lumiview's image with them by
+ * depth. See examples-c/README.md for the flags and what each check proves.
  *
- * Interactive: drag to orbit, scroll to zoom, +/- exposure, [/] the luminaires' own exposure, S solid
- * overlay, H housing overlay,
- * 1/2/3 near-field selection nearest/idw4/continuous, P near-field proxy on/off (printed and shown in
- * the title), Esc quits. Test mode (any of --frames, --screenshot, --probe, --check-luminaire-pixel,
- * --check-nearfield-pixel): runs N frames (default 1), runs the checks on the last one and exits
- * non-zero if one fails. */
+ * Interactive: drag to orbit, scroll to zoom, +/- exposure, L shadows on/off, I indirect light on/off,
+ * S solid overlay, H housing overlay, 1/2/3 near-field selection nearest/idw4/continuous, P near-field
+ * proxy on/off (printed and shown in the title), Esc quits. Test mode (any of --frames, --screenshot,
+ * --probe, --check-luminaire-pixel, --check-nearfield-pixel): runs N frames (default 1), runs the checks
+ * on the last one and exits non-zero if one fails. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,41 +23,49 @@
 
 #include "checks.h"
 #include "gl_interop.h"
+#include "host_objects.h"
 #include "lumiview.h"
 #include "lv_args.h"
 #include "lv_lumi.h"
 #include "lv_math.h"
 #include "lv_scan.h"
-#include "scene.h"
+#include "room.h"
 
 #ifndef LUMIVIEW_REPO_ROOT
 #define LUMIVIEW_REPO_ROOT "."
 #endif
 #define DEFAULT_FILE LUMIVIEW_REPO_ROOT "/tests/data/misc/arnold-usd_bega_50804K3.ies"
-#define MAX_PROBES 8
+#define DEFAULT_SCENE LUMIVIEW_REPO_ROOT "/assets/scenes/office.glb"
+#define MAX_PROBES 16
 #define FOVY_DEG 60.0
 #define NEAR_M 0.05
 #define FAR_M 50.0
-/* Degrees the camera orbits per frame in a --frames run. */
+/* Degrees the camera orbits per frame in a --frames run (ending at the given view). */
 #define ORBIT_STEP_DEG 0.6
-/* The 2D look-up table: 0.5° in C and γ, so the web's nodes (any multiple of 0.5°) are texels. */
-#define LUT_W 720u
-#define LUT_H 361u
+/* The default view: from the office's south-west corner across the room towards the cabinet in the
+ * north-east corner, the near-field luminaire on its stand by the east wall. */
+#define DEFAULT_EYE lv_vec3_make(-2.85, 1.65, 1.9)
+#define DEFAULT_TARGET lv_vec3_make(0.8, 1.15, -0.9)
+#define DEFAULT_EXPOSURE 0.016
 
 typedef struct options {
-    const char *file;
+    const char *file, *scene;
     const char *scan;  /* NULL: the bundled scan; "none": no near-field luminaire */
     const char *proxy; /* NULL: the bundled scan's proxy (or none for another scan); "none": no proxy */
     uint32_t nf_mode;
     bool nf_proxy, check_nearfield;
     const char *screenshot;
+    const char *press; /* keys pressed by the test, one per frame from the first (NULL: none) */
     long frames; /* 0: interactive */
     int probe_count;
     lv_vec3 probes[MAX_PROBES];
-    bool has_camera, has_target, occluder, indirect, check_pixel, validation, test_uuid_mismatch;
+    double probe_rgb[MAX_PROBES][3];
+    double next_probe_rgb[3];
+    bool has_camera, has_target, occluder, shadows, indirect, check_pixel, validation, test_uuid_mismatch;
+    long bounce_photons;
     lv_vec3 camera, target;
     long check_x, check_y;
-    double exposure, luminaire_exposure;
+    double exposure;
     long width, height;
     bool color32;
     uint32_t overlays;
@@ -68,10 +75,11 @@ typedef struct options {
 typedef struct app {
     double yaw_deg, pitch_deg, distance;
     lv_vec3 target;
-    double exposure, luminaire_exposure;
+    double exposure;
     uint32_t overlays;
     uint32_t nf_mode;
     bool nf_proxy, nf_dirty;
+    bool shadows, indirect, lighting_dirty;
     bool dragging;
     double last_x, last_y;
 } app;
@@ -79,29 +87,36 @@ typedef struct app {
 static void usage(FILE *f) {
     fprintf(f,
             "usage: glfw_host [options]\n"
-            "  --file PATH                  IES or EULUMDAT file (default %s)\n"
+            "  --scene PATH                 the room: a glTF scene in metres, +Y up (default %s)\n"
+            "  --file PATH                  IES or EULUMDAT file of the six pendants (default %s)\n"
+            "  --shadows on|off             shadow maps in lumiview's room (default on; key L)\n"
+            "  --indirect on|off            inter-reflection in lumiview's room (default on; key I)\n"
+            "  --bounce-photons N           photons for the inter-reflection, 1..65536 (default: the library's, 256)\n"
             "  --scan PATH|none             near-field scan: .lvpack, JSON manifest or TM-25 ray file (default: the\n"
             "                               bundled two-planes scan, generated on first run); none: no near-field luminaire\n"
             "  --scan-proxy PATH|none       its proxy glTF (default: the bundled scan's; none for another scan)\n"
             "  --nearfield-mode nearest|idw4|continuous  near-field camera selection at start (default continuous; keys 1/2/3)\n"
             "  --nearfield-proxy on|off     use the proxy at start (default on; key P)\n"
             "  --check-nearfield-pixel      the near-field luminaire's centre pixel vs its scan's ground truth\n"
-            "  --frames N                   run N frames, the camera orbiting %.1f° per frame (clockwise seen from above), then exit\n"
+            "  --frames N                   run N frames, the camera orbiting %.1f° per frame (clockwise seen from above)\n"
+            "                               and arriving at the given view on the last, then exit\n"
             "  --screenshot PATH            write the last frame as PNG\n"
-            "  --probe X,Y,Z                floor illuminance at a world point: shader vs library (repeatable)\n"
-            "  --check-luminaire-pixel X,Y  composited pixel (from the top-left) vs prediction\n"
+            "  --press KEYS                 press these keys, one per frame from the first (of L I S H P 1 2 3 + -;\n"
+            "                               tests the key paths: a state printed, then the checks on the last frame)\n"
+            "  --probe X,Y,Z                illuminance at a point on an upward-facing surface the view sees: the\n"
+            "                               rendered pixel vs lumi_scene_illuminance (repeatable)\n"
+            "  --probe-reflectance R,G,B    linear RGB base colour of the surface of the probes that follow\n"
+            "                               (default the office floor, 0.25,0.19,0.14)\n"
+            "  --check-luminaire-pixel X,Y  pixel (from the top-left) on a pendant's photometric centre vs prediction\n"
             "  --camera X,Y,Z --target X,Y,Z  fix the view (world metres, Y up)\n"
-            "  --occluder on|off            the cabinet between the test view and the luminaire (default on)\n"
-            "  --indirect on|off            uniform inter-reflected illuminance (default on)\n"
-            "  --exposure E                 tone-mapping exposure, m^2/cd (default 0.02)\n"
-            "  --luminaire-exposure E       exposure of lumiview's layer, the luminaires' own luminance (default: --exposure;\n"
-            "                               lower shows the pattern of a source far brighter than the room; keys [ and ])\n"
+            "  --occluder on|off            a column the host draws on the test view's line of sight (default off)\n"
+            "  --exposure E                 tone-mapping exposure, m^2/cd (default %g)\n"
             "  --size WxH                   framebuffer size (default 801x601)\n"
             "  --color-format rgba16f|rgba32f  lumiview's colour target (default rgba16f)\n"
             "  --overlays none|solid|housing|both  lumiview's overlays at start (keys S and H toggle them)\n"
             "  --validation                 Vulkan validation in lumiview; any message fails\n"
             "  --test-uuid-mismatch         test the refusal: pretend GL's device UUID differs (exits 1)\n",
-            DEFAULT_FILE, ORBIT_STEP_DEG);
+            DEFAULT_SCENE, DEFAULT_FILE, ORBIT_STEP_DEG, DEFAULT_EXPOSURE);
 }
 
 static bool parse_on_off(const char *s, bool *out) {
@@ -116,17 +131,32 @@ static bool parse_on_off(const char *s, bool *out) {
     return false;
 }
 
+/* "r,g,b" in 0…1 with a luminance-weighted reflectance above 0. */
+static bool parse_reflectance(const char *s, double rgb[3]) {
+    lv_vec3 v;
+    if (!lv_parse_vec3(s, &v)) return false;
+    rgb[0] = v.x;
+    rgb[1] = v.y;
+    rgb[2] = v.z;
+    for (int k = 0; k < 3; k++)
+        if (!(rgb[k] >= 0.0 && rgb[k] <= 1.0)) return false;
+    return room_reflectance_y(rgb) > 0.0;
+}
+
 /* 0: go on; 1: --help printed; 2: usage error. */
 static int parse_args(int argc, char **argv, options *o) {
     memset(o, 0, sizeof *o);
     o->file = DEFAULT_FILE;
+    o->scene = DEFAULT_SCENE;
     o->nf_mode = LUMI_SELECTION_CONTINUOUS;
     o->nf_proxy = true;
-    o->occluder = true;
+    o->shadows = true;
     o->indirect = true;
-    o->exposure = 0.02;
+    o->bounce_photons = (long)lumi_scene_settings_default().bounce_photons;
+    o->exposure = DEFAULT_EXPOSURE;
     o->width = 801;
     o->height = 601;
+    for (int k = 0; k < 3; k++) o->next_probe_rgb[k] = ROOM_FLOOR_RGB[k];
     bool test_mode = false;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -150,6 +180,14 @@ static int parse_args(int argc, char **argv, options *o) {
             return 2;
         } else if (strcmp(a, "--file") == 0) {
             o->file = v;
+        } else if (strcmp(a, "--scene") == 0) {
+            o->scene = v;
+        } else if (strcmp(a, "--shadows") == 0) {
+            bad = !parse_on_off(v, &o->shadows);
+        } else if (strcmp(a, "--indirect") == 0) {
+            bad = !parse_on_off(v, &o->indirect);
+        } else if (strcmp(a, "--bounce-photons") == 0) {
+            bad = !lv_parse_int(v, 1, 65536, &o->bounce_photons);
         } else if (strcmp(a, "--scan") == 0) {
             o->scan = v;
         } else if (strcmp(a, "--scan-proxy") == 0) {
@@ -164,10 +202,17 @@ static int parse_args(int argc, char **argv, options *o) {
         } else if (strcmp(a, "--screenshot") == 0) {
             o->screenshot = v;
             test_mode = true;
+        } else if (strcmp(a, "--press") == 0) {
+            o->press = v;
+            bad = strspn(v, "LISHP123+-") != strlen(v);
+            test_mode = true;
         } else if (strcmp(a, "--probe") == 0) {
             bad = o->probe_count >= MAX_PROBES || !lv_parse_vec3(v, &o->probes[o->probe_count]);
+            if (!bad) memcpy(o->probe_rgb[o->probe_count], o->next_probe_rgb, sizeof o->next_probe_rgb);
             o->probe_count++;
             test_mode = true;
+        } else if (strcmp(a, "--probe-reflectance") == 0) {
+            bad = !parse_reflectance(v, o->next_probe_rgb);
         } else if (strcmp(a, "--check-luminaire-pixel") == 0) {
             bad = !lv_parse_xy(v, &o->check_x, &o->check_y);
             o->check_pixel = true;
@@ -180,12 +225,8 @@ static int parse_args(int argc, char **argv, options *o) {
             o->has_target = true;
         } else if (strcmp(a, "--occluder") == 0) {
             bad = !parse_on_off(v, &o->occluder);
-        } else if (strcmp(a, "--indirect") == 0) {
-            bad = !parse_on_off(v, &o->indirect);
         } else if (strcmp(a, "--exposure") == 0) {
             bad = !lv_parse_double(v, &o->exposure) || !(o->exposure > 0.0);
-        } else if (strcmp(a, "--luminaire-exposure") == 0) {
-            bad = !lv_parse_double(v, &o->luminaire_exposure) || !(o->luminaire_exposure > 0.0);
         } else if (strcmp(a, "--size") == 0) {
             bad = !lv_parse_size(v, &o->width, &o->height);
         } else if (strcmp(a, "--overlays") == 0) {
@@ -209,6 +250,11 @@ static int parse_args(int argc, char **argv, options *o) {
         i++;
     }
     if (test_mode && o->frames == 0) o->frames = 1;
+    if (o->press && (long)strlen(o->press) > o->frames) {
+        fprintf(stderr, "glfw_host: --press %s needs --frames %zu or more (one key per frame)\n", o->press,
+                strlen(o->press));
+        return 2;
+    }
     if (o->check_nearfield && o->scan && strcmp(o->scan, "none") == 0) {
         fprintf(stderr, "glfw_host: --check-nearfield-pixel needs the near-field luminaire (not --scan none)\n");
         return 2;
@@ -220,11 +266,11 @@ static int parse_args(int argc, char **argv, options *o) {
     return 0;
 }
 
-/* Whether a point is inside the room, ROOM_MARGIN_M from its surfaces. */
+/* Whether a point is inside the office, ROOM_MARGIN_M from its surfaces. */
 #define ROOM_MARGIN_M 0.05
 static bool in_room(lv_vec3 p) {
-    double h = ROOM_HALF_M - ROOM_MARGIN_M;
-    return fabs(p.x) <= h && fabs(p.z) <= h && p.y >= ROOM_MARGIN_M && p.y <= ROOM_HEIGHT_M - ROOM_MARGIN_M;
+    return p.x >= ROOM_MIN_X + ROOM_MARGIN_M && p.x <= ROOM_MAX_X - ROOM_MARGIN_M && p.z >= ROOM_MIN_Z + ROOM_MARGIN_M &&
+           p.z <= ROOM_MAX_Z - ROOM_MARGIN_M && p.y >= ROOM_MARGIN_M && p.y <= ROOM_HEIGHT_M - ROOM_MARGIN_M;
 }
 
 /* The orbit camera's eye, pulled in along its ray from the target so that it stays in the room. */
@@ -244,17 +290,21 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods) {
     switch (key) {
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(w, GLFW_TRUE); break;
     case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD:
-        a->exposure *= 1.25;
-        a->luminaire_exposure *= 1.25;
-        break;
+    case GLFW_KEY_KP_ADD: a->exposure *= 1.25; break;
     case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT:
-        a->exposure /= 1.25;
-        a->luminaire_exposure /= 1.25;
+    case GLFW_KEY_KP_SUBTRACT: a->exposure /= 1.25; break;
+    case GLFW_KEY_L:
+        if (action == GLFW_PRESS) {
+            a->shadows = !a->shadows;
+            a->lighting_dirty = true;
+        }
         break;
-    case GLFW_KEY_RIGHT_BRACKET: a->luminaire_exposure *= 1.25; break;
-    case GLFW_KEY_LEFT_BRACKET: a->luminaire_exposure /= 1.25; break;
+    case GLFW_KEY_I:
+        if (action == GLFW_PRESS) {
+            a->indirect = !a->indirect;
+            a->lighting_dirty = true;
+        }
+        break;
     case GLFW_KEY_S:
         if (action == GLFW_PRESS) a->overlays ^= LUMI_OVERLAY_SOLID;
         break;
@@ -277,6 +327,22 @@ static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods) {
         }
         break;
     default: break;
+    }
+}
+
+/* The GLFW key of a --press character. */
+static int press_key(char c) {
+    switch (c) {
+    case 'L': return GLFW_KEY_L;
+    case 'I': return GLFW_KEY_I;
+    case 'S': return GLFW_KEY_S;
+    case 'H': return GLFW_KEY_H;
+    case 'P': return GLFW_KEY_P;
+    case '1': return GLFW_KEY_1;
+    case '2': return GLFW_KEY_2;
+    case '3': return GLFW_KEY_3;
+    case '+': return GLFW_KEY_EQUAL;
+    default: return GLFW_KEY_MINUS;
     }
 }
 
@@ -311,36 +377,6 @@ static void on_glfw_error(int code, const char *message) {
     fprintf(stderr, "glfw_host: GLFW error 0x%x: %s\n", code, message ? message : "");
 }
 
-/* Fetches the 2D look-up table: LUT_W × LUT_H, f32, absolute cd. Caller frees. */
-static float *fetch_lut(lumi_context *ctx, lumi_luminaire lum) {
-    lumi_lut_desc d = lumi_lut_desc_default();
-    d.kind = LUMI_LUT_2D;
-    d.width = LUT_W;
-    d.height = LUT_H;
-    d.normalize = false;
-    d.encoding = LUMI_LUT_F32;
-    size_t need = 0;
-    if (!lv_lumi_ok(lumi_luminaire_lut(ctx, lum, &d, NULL, 0, &need, NULL), "lumi_luminaire_lut (size)"))
-        return NULL;
-    if (need != (size_t)LUT_W * LUT_H * sizeof(float)) {
-        fprintf(stderr, "glfw_host: the look-up table needs %zu bytes, expected %zu\n", need,
-                (size_t)LUT_W * LUT_H * sizeof(float));
-        return NULL;
-    }
-    float *lut = malloc(need);
-    if (!lut) {
-        fprintf(stderr, "glfw_host: out of memory\n");
-        return NULL;
-    }
-    size_t written = 0;
-    double max_cd = 0.0;
-    if (!lv_lumi_ok(lumi_luminaire_lut(ctx, lum, &d, (uint8_t *)lut, need, &written, &max_cd), "lumi_luminaire_lut")) {
-        free(lut);
-        return NULL;
-    }
-    return lut;
-}
-
 /* Exports one attachment and imports it into GL (the export's fd is consumed either way). */
 static bool import_attachment(lumi_context *ctx, lumi_target target, uint32_t which, gl_imported *out) {
     lumi_export e;
@@ -371,15 +407,16 @@ int main(int argc, char **argv) {
     int rc = 1;
     GLFWwindow *win = NULL;
     lumi_context *ctx = NULL;
-    lumi_luminaire lum = 0, nf_lum = 0;
-    lumi_instance inst = 0, nf_inst = 0;
+    lumi_luminaire nf_lum = 0;
+    lumi_instance nf_inst = 0;
     lumi_target target = 0;
-    float *lut = NULL;
+    room rm;
+    memset(&rm, 0, sizeof rm);
     float nf_model[16];
-    scene_nearfield_model(nf_model);
+    host_nearfield_model(nf_model);
     bool nf_has_proxy = false;
-    scene sc;
-    memset(&sc, 0, sizeof sc);
+    host_objects ho;
+    memset(&ho, 0, sizeof ho);
     gl_imported color, depth;
     memset(&color, 0, sizeof color);
     memset(&depth, 0, sizeof depth);
@@ -443,17 +480,8 @@ int main(int argc, char **argv) {
     lv_uuid_format(caps.device_uuid, uuid_text);
     printf("lumiview device: %s (deviceUUID %s matches GL)\n", caps.adapter_name, uuid_text);
 
-    if (!lv_lumi_ok(lumi_luminaire_load(ctx, o.file, &lum), "lumi_luminaire_load")) goto done;
-    lumi_luminaire_info info;
-    if (!lv_lumi_ok(lumi_luminaire_get_info(ctx, lum, &info), "lumi_luminaire_get_info")) goto done;
-    float model[16];
-    scene_luminaire_model(model);
-    if (!lv_lumi_ok(lumi_instance_create(ctx, lum, model, &inst), "lumi_instance_create")) goto done;
-    printf("luminaire %s: %.1f lm, max %.1f cd, opening %.3f x %.3f x %.3f m, at (%.2f, %.2f, %.2f) nadir down\n",
-           o.file, info.flux_lm, info.max_intensity_cd, info.opening_size_m[0], info.opening_size_m[1],
-           info.opening_size_m[2], LUMINAIRE_X, LUMINAIRE_Y, LUMINAIRE_Z);
-    lut = fetch_lut(ctx, lum);
-    if (!lut) goto done;
+    /* lumiview's room: the scene, the pendants, the lighting switches. */
+    if (!room_create(&rm, ctx, o.scene, o.file, o.shadows, o.indirect, (uint32_t)o.bounce_photons)) goto done;
     if (nearfield) {
         lumi_luminaire_desc nd = lumi_luminaire_desc_default();
         nd.proxy_path = proxy_path;
@@ -470,14 +498,16 @@ int main(int argc, char **argv) {
             !lv_lumi_ok(lumi_instance_set_nearfield(ctx, nf_inst, o.nf_mode, o.nf_proxy), "lumi_instance_set_nearfield"))
             goto done;
         printf("near-field luminaire %s: %u cameras, capture sphere r = %.3f m, proxy %s, %.1f MiB on the GPU; at "
-               "(%.2f, %.2f, %.2f) on a stand, facing yaw %.0f°; selection %s, proxy %s (keys 1/2/3, P)\n",
+               "(%.2f, %.2f, %.2f) on the host's stand, facing yaw %.0f°; selection %s, proxy %s (keys 1/2/3, P)\n",
                scan_path, ni.camera_count, ni.capture_radius_m, ni.has_proxy ? proxy_path : "none",
                ni.gpu_bytes / 1048576.0, NEARFIELD_X, NEARFIELD_Y, NEARFIELD_Z, NEARFIELD_YAW_DEG,
                lv_selection_name(o.nf_mode), o.nf_proxy ? (ni.has_proxy ? "on" : "on (but none loaded)") : "off");
     }
-    if (!scene_create(&sc, model, &info, lut, LUT_W, LUT_H, o.occluder, o.indirect, nearfield)) goto done;
-    free(lut);
-    lut = NULL;
+    /* The host's own objects, lit from the library's illuminance in the room. */
+    if (!host_objects_create(&ho, o.occluder, nearfield) || !host_objects_light(&ho, &rm, ctx, o.indirect)) goto done;
+    printf("host objects: %d box(es) drawn in GL%s%s, lit per face by lumi_scene_illuminance (%s)\n", ho.box_count,
+           nearfield ? " (the near-field stand)" : "", o.occluder ? " (the test column)" : "",
+           o.indirect ? "total" : "direct");
 
     lumi_target_desc td = lumi_target_desc_default();
     td.width = (uint32_t)fb_w;
@@ -496,15 +526,17 @@ int main(int argc, char **argv) {
     app a;
     memset(&a, 0, sizeof a);
     a.exposure = o.exposure;
-    a.luminaire_exposure = o.luminaire_exposure > 0.0 ? o.luminaire_exposure : o.exposure;
     a.overlays = o.overlays;
     a.nf_mode = o.nf_mode;
     a.nf_proxy = o.nf_proxy;
-    a.target = o.has_target ? o.target : lv_vec3_make(0.0, 1.3, 0.0);
-    lv_vec3 eye0 = o.has_camera ? o.camera : lv_vec3_make(-1.9, 1.6, 2.1);
+    a.shadows = o.shadows;
+    a.indirect = o.indirect;
+    a.target = o.has_target ? o.target : DEFAULT_TARGET;
+    lv_vec3 eye0 = o.has_camera ? o.camera : DEFAULT_EYE;
     if (!in_room(eye0) || !in_room(a.target)) {
-        fprintf(stderr, "glfw_host: --camera and --target must be inside the room (|x|, |z| < %.2f, %.2f < y < %.2f)\n",
-                ROOM_HALF_M - ROOM_MARGIN_M, ROOM_MARGIN_M, ROOM_HEIGHT_M - ROOM_MARGIN_M);
+        fprintf(stderr, "glfw_host: --camera and --target must be inside the room (%.2f < x < %.2f, %.2f < y < %.2f, "
+                        "%.2f < z < %.2f)\n", ROOM_MIN_X + ROOM_MARGIN_M, ROOM_MAX_X - ROOM_MARGIN_M, ROOM_MARGIN_M,
+                ROOM_HEIGHT_M - ROOM_MARGIN_M, ROOM_MIN_Z + ROOM_MARGIN_M, ROOM_MAX_Z - ROOM_MARGIN_M);
         goto done;
     }
     lv_vec3 off = lv_vec3_sub(eye0, a.target);
@@ -529,11 +561,11 @@ int main(int argc, char **argv) {
         bool last = o.frames && frame == o.frames - 1;
         frame_view fv;
         memset(&fv, 0, sizeof fv);
-        fv.eye = orbit_eye(&a, o.frames > 1 ? -frame * ORBIT_STEP_DEG : 0.0);
+        /* A --frames run orbits clockwise (seen from above) and arrives at the given view on its last frame. */
+        fv.eye = orbit_eye(&a, o.frames > 1 ? (double)(o.frames - 1 - frame) * ORBIT_STEP_DEG : 0.0);
         fv.width = fb_w;
         fv.height = fb_h;
         fv.exposure = (float)a.exposure;
-        fv.luminaire_exposure = (float)a.luminaire_exposure;
         fv.half_float = !o.color32;
         if (!lv_mat4_look_at(fv.view, fv.eye, a.target, lv_vec3_make(0, 1, 0))) {
             fprintf(stderr, "glfw_host: degenerate camera (looking straight up or down?)\n");
@@ -542,6 +574,11 @@ int main(int argc, char **argv) {
         }
         lv_mat4_perspective_gl(fv.projection, FOVY_DEG, (double)fb_w / fb_h, NEAR_M, FAR_M);
 
+        if (o.press && frame < (long)strlen(o.press)) {
+            printf("frame %ld: key %c\n", frame, o.press[frame]);
+            on_key(win, press_key(o.press[frame]), 0, GLFW_PRESS, 0);
+            fv.exposure = (float)a.exposure;
+        }
         if (a.nf_dirty) {
             a.nf_dirty = false;
             if (nf_inst) {
@@ -554,7 +591,19 @@ int main(int argc, char **argv) {
                        a.nf_proxy ? (nf_has_proxy ? "on" : "on (none loaded)") : "off");
             }
         }
-        /* 1. lumiview renders the luminaires with the host's camera (returns after the GPU is done). */
+        if (a.lighting_dirty) {
+            a.lighting_dirty = false;
+            bool relight = rm.indirect != a.indirect;
+            rm.shadows = a.shadows;
+            rm.indirect = a.indirect;
+            if (!room_apply_settings(&rm, ctx) || (relight && !host_objects_light(&ho, &rm, ctx, a.indirect))) {
+                failed = true;
+                break;
+            }
+            printf("room: shadows %s, indirect %s\n", a.shadows ? "on" : "off", a.indirect ? "on" : "off");
+        }
+        /* 1. lumiview renders the lit room and the luminaires with the host's camera (returns after the
+         *    GPU is done). */
         lumi_camera cam = lumi_camera_default();
         memcpy(cam.view, fv.view, sizeof cam.view);
         memcpy(cam.projection, fv.projection, sizeof cam.projection);
@@ -563,21 +612,21 @@ int main(int argc, char **argv) {
         cam.origin = LUMI_ORIGIN_BOTTOM_LEFT; /* memory row 0 = bottom row, like GL textures */
         lumi_render_options ro = lumi_render_options_default();
         ro.output = LUMI_OUTPUT_LUMINANCE;
-        ro.exposure = fv.luminaire_exposure;
+        ro.exposure = fv.exposure;
         ro.overlays = a.overlays;
         if (!lv_lumi_ok(lumi_render(ctx, target, &cam, &ro), "lumi_render")) {
             failed = true;
             break;
         }
-        /* 2. The room, then the luminaire composited by depth. */
+        /* 2. The host's own objects, then lumiview's image composited by depth. */
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         glViewport(0, 0, fb_w, fb_h);
         glClearColor(0.0f, 0.0f, 0.0f, 1.0f);
         glClearDepth(1.0);
         glDepthMask(GL_TRUE);
         glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-        scene_draw_room(&sc, fv.view, fv.projection, fv.exposure);
-        scene_composite(&sc, color.texture, depth.texture, fv.luminaire_exposure);
+        host_objects_draw(&ho, fv.view, fv.projection, fv.exposure);
+        host_composite(&ho, color.texture, depth.texture, fv.exposure);
         if (!lv_gl_ok("drawing a frame")) {
             failed = true;
             break;
@@ -585,15 +634,15 @@ int main(int argc, char **argv) {
         /* 3. On the last frame of a test run: the checks and the screenshot (back buffer). */
         if (last) {
             if (o.check_pixel &&
-                !check_luminaire_pixel(&sc, ctx, lum, inst, &color, &depth, &fv, o.check_x, o.check_y))
+                !check_luminaire_pixel(&rm, &ho, ctx, &color, &depth, &fv, o.check_x, o.check_y))
                 failed = true;
             if (o.check_nearfield &&
-                !check_nearfield_pixel(&sc, &color, &depth, &fv, nf_model, a.nf_proxy && nf_has_proxy,
+                !check_nearfield_pixel(&ho, &color, &depth, &fv, nf_model, a.nf_proxy && nf_has_proxy,
                                        lv_selection_name(a.nf_mode)))
                 failed = true;
             if (o.screenshot && !write_screenshot(o.screenshot, fb_w, fb_h)) failed = true;
             for (int i = 0; i < o.probe_count; i++)
-                if (!check_probe(&sc, ctx, inst, o.probes[i])) failed = true;
+                if (!check_probe(&rm, ctx, &color, &depth, &fv, o.probes[i], o.probe_rgb[i], a.indirect)) failed = true;
         }
         /* 4. The sync contract: GL's reads of the imported images finish before the next lumi_render. */
         glFinish();
@@ -601,8 +650,8 @@ int main(int argc, char **argv) {
         glfwPollEvents();
         if (!o.frames) {
             char title[224];
-            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd, luminaires %.3g (+/-, [/])%s%s%s%s%s",
-                     a.exposure, a.luminaire_exposure,
+            snprintf(title, sizeof title, "lumiview GLFW host - exposure %.3g m2/cd (+/-) - shadows %s (L), indirect %s (I)%s%s%s%s%s",
+                     a.exposure, a.shadows ? "on" : "off", a.indirect ? "on" : "off",
                      a.overlays & LUMI_OVERLAY_SOLID ? " [solid]" : "", a.overlays & LUMI_OVERLAY_HOUSING ? " [housing]" : "",
                      nf_inst ? " - near-field: " : "", nf_inst ? lv_selection_name(a.nf_mode) : "",
                      nf_inst ? (a.nf_proxy && nf_has_proxy ? " + proxy (1/2/3, P)" : ", no proxy (1/2/3, P)") : "");
@@ -627,18 +676,16 @@ int main(int argc, char **argv) {
     if (o.frames) printf("glfw_host: %s\n", failed ? "FAILED" : "all checks passed");
 
 done:
-    free(lut);
     if (gl_loaded) {
         glFinish(); /* GL is done with the imported images before lumiview frees its side */
         gl_imported_free(&color);
         gl_imported_free(&depth);
-        scene_destroy(&sc);
+        host_objects_destroy(&ho);
         if (!lv_gl_ok("releasing GL objects")) rc = 1;
     }
     if (ctx) {
         if (target && !lv_lumi_ok(lumi_target_destroy(ctx, target), "lumi_target_destroy")) rc = 1;
-        if (inst && !lv_lumi_ok(lumi_instance_destroy(ctx, inst), "lumi_instance_destroy")) rc = 1;
-        if (lum && !lv_lumi_ok(lumi_luminaire_destroy(ctx, lum), "lumi_luminaire_destroy")) rc = 1;
+        if (!room_destroy(&rm, ctx)) rc = 1;
         if (nf_inst && !lv_lumi_ok(lumi_instance_destroy(ctx, nf_inst), "lumi_instance_destroy (scan)")) rc = 1;
         if (nf_lum && !lv_lumi_ok(lumi_luminaire_destroy(ctx, nf_lum), "lumi_luminaire_destroy (scan)")) rc = 1;
         lumi_context_destroy(ctx);
