@@ -349,6 +349,10 @@ typedef struct lumi_scene_settings {
   uint32_t bounce_photons;
   // Distance below which a virtual point light's 1/r² is held, metres (finite, ≥ 0).
   float vpl_clamp_m;
+  // Most instances whose shadow maps are rendered again in one `lumi_render` after they moved
+  // (≥ 1); the others keep their old maps until a later frame's turn (lowest first). A new
+  // scene, shadow layout or atlas renders every instance at once.
+  uint32_t shadow_updates_per_frame;
 } lumi_scene_settings;
 
 // How `lumi_scene_illuminance` estimates. Start from `lumi_illuminance_options_default()`.
@@ -754,7 +758,8 @@ lumi_status lumi_render(struct lumi_context *ctx,
                         const struct lumi_render_options *options);
 
 // The GPU pass's defaults: shadows on, lux floor 0.1 lx, shadow budget 64 MiB, faces up to 512 px,
-// inter-reflection on from 256 photons with a 0.25 m clamp.
+// inter-reflection on from 256 photons with a 0.25 m clamp, shadows of up to 32 moved instances
+// rendered per frame.
 struct lumi_scene_settings lumi_scene_settings_default(void);
 
 // The defaults: `LUMI_ILLUMINANCE_TOTAL`, 512 paths per point, 4 direct estimates of 64 area

@@ -871,3 +871,96 @@ fn the_office_with_inter_reflection_gathers_its_virtual_point_lights() {
     })
     .unwrap();
 }
+
+#[test]
+fn moved_luminaires_update_their_shadows_within_the_per_frame_budget() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let settings = SceneSettings {
+        indirect: false,
+        shadow_updates_per_frame: 2,
+        ..SceneSettings::default()
+    };
+    r.set_scene_settings(settings).unwrap();
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
+    let scene = lumiview::scene::load(&glb).unwrap();
+    let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    let (w, hgt) = (64u32, 48u32);
+    let cam = perspective(
+        Vec3::new(2.8, 1.7, 1.8),
+        Vec3::new(-1.0, 0.5, -0.9),
+        75.0,
+        w as f32 / hgt as f32,
+    );
+    let before: Vec<DMat4> = OFFICE_LUMINAIRES.iter().map(|q| q.matrix()).collect();
+    let after: Vec<DMat4> = before
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            if i == 0 {
+                *m
+            } else {
+                DMat4::from_translation(DVec3::new(0.3, -0.4, 0.2)) * *m
+            }
+        })
+        .collect();
+    let read = |r: &mut Renderer, t: &mut RenderTarget| -> Vec<f32> {
+        r.render(t, &cam, &RenderOptions::default()).unwrap();
+        t.read(&r.ctx, lumiview::gpu::Attachment::Color)
+            .unwrap()
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect()
+    };
+    r.set_scene(&scene).unwrap();
+    let lum = r.add_photometry(p.clone()).unwrap();
+    let ids: Vec<_> = before
+        .iter()
+        .map(|m| r.add_instance(lum, m.as_mat4()).unwrap())
+        .collect();
+    let mut t = RenderTarget::new(&r.ctx, &TargetDesc::luminance(w, hgt)).unwrap();
+    read(&mut r, &mut t);
+    let s0 = r.scene_stats();
+    assert_eq!(
+        (s0.shadow_lights_rendered, s0.shadows_pending),
+        (6, 0),
+        "a new atlas renders all: {s0:?}"
+    );
+    read(&mut r, &mut t);
+    assert_eq!(
+        r.scene_stats().shadow_lights_rendered,
+        6,
+        "nothing moved, nothing rendered"
+    );
+    for (id, m) in ids.iter().zip(&after) {
+        r.set_transform(*id, m.as_mat4()).unwrap();
+    }
+    // Five moved, two a frame: 2, 2, 1.
+    let mut pending = Vec::new();
+    let mut last = Vec::new();
+    for _ in 0..4 {
+        last = read(&mut r, &mut t);
+        let s = r.scene_stats();
+        pending.push((s.shadow_lights_rendered - 6, s.shadows_pending));
+    }
+    assert_eq!(pending, vec![(2, 3), (4, 1), (5, 0), (5, 0)]);
+    // The frame after the last update is the frame a fresh renderer draws.
+    let mut fresh = renderer().unwrap();
+    fresh.set_scene_settings(settings).unwrap();
+    fresh.set_scene(&scene).unwrap();
+    let lum2 = fresh.add_photometry(p.clone()).unwrap();
+    for m in &after {
+        fresh.add_instance(lum2, m.as_mat4()).unwrap();
+    }
+    let mut t2 = RenderTarget::new(&fresh.ctx, &TargetDesc::luminance(w, hgt)).unwrap();
+    let want = read(&mut fresh, &mut t2);
+    let worst = last
+        .iter()
+        .zip(&want)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert_eq!(
+        worst, 0.0,
+        "incremental shadow maps differ from fresh ones by up to {worst}"
+    );
+}

@@ -14,3 +14,11 @@ struct ShadowFace {
 fn vs_shadow(@location(0) position: vec3<f32>) -> @builtin(position) vec4<f32> {
     return face.clip_from_world * vec4<f32>(position, 1.0);
 }
+
+// Clears one face's square (the viewport) to the far depth 0 before it is rendered again: a
+// full-screen triangle at depth 0 drawn with the depth test off.
+@vertex
+fn vs_clear(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
+    let p = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
+    return vec4<f32>(p * 2.0 - 1.0, 0.0, 1.0);
+}

@@ -73,6 +73,10 @@ pub struct lumi_scene_settings {
     pub bounce_photons: u32,
     /// Distance below which a virtual point light's 1/r² is held, metres (finite, ≥ 0).
     pub vpl_clamp_m: f32,
+    /// Most instances whose shadow maps are rendered again in one `lumi_render` after they moved
+    /// (≥ 1); the others keep their old maps until a later frame's turn (lowest first). A new
+    /// scene, shadow layout or atlas renders every instance at once.
+    pub shadow_updates_per_frame: u32,
 }
 
 /// How `lumi_scene_illuminance` estimates. Start from `lumi_illuminance_options_default()`.
@@ -108,7 +112,8 @@ pub struct SceneEntry {
 }
 
 /// The GPU pass's defaults: shadows on, lux floor 0.1 lx, shadow budget 64 MiB, faces up to 512 px,
-/// inter-reflection on from 256 photons with a 0.25 m clamp.
+/// inter-reflection on from 256 photons with a 0.25 m clamp, shadows of up to 32 moved instances
+/// rendered per frame.
 #[no_mangle]
 pub extern "C" fn lumi_scene_settings_default() -> lumi_scene_settings {
     let d = SceneSettings::default();
@@ -120,6 +125,7 @@ pub extern "C" fn lumi_scene_settings_default() -> lumi_scene_settings {
         indirect: d.indirect,
         bounce_photons: d.bounce_photons,
         vpl_clamp_m: d.vpl_clamp_m,
+        shadow_updates_per_frame: d.shadow_updates_per_frame,
     }
 }
 
@@ -171,6 +177,7 @@ fn pass_error(e: GpuError) -> FfiError {
                 Arg::FacePx => "settings.max_face_px",
                 Arg::BouncePhotons => "settings.bounce_photons",
                 Arg::VplClamp => "settings.vpl_clamp_m",
+                Arg::ShadowUpdates => "settings.shadow_updates_per_frame",
                 Arg::Scene => "scene",
                 other => other.name(),
             };
@@ -329,6 +336,7 @@ pub unsafe extern "C" fn lumi_context_set_scene_settings(
                     indirect: s.indirect,
                     bounce_photons: s.bounce_photons,
                     vpl_clamp_m: s.vpl_clamp_m,
+                    shadow_updates_per_frame: s.shadow_updates_per_frame,
                 })
                 .map_err(pass_error)
         })

@@ -133,6 +133,8 @@ pub enum Arg {
     BouncePhotons,
     /// The distance a virtual point light's 1/r² is held at.
     VplClamp,
+    /// Luminaires whose shadows are rendered again per frame.
+    ShadowUpdates,
 }
 
 impl Arg {
@@ -163,6 +165,7 @@ impl Arg {
             Arg::FacePx => "max_face_px",
             Arg::BouncePhotons => "bounce_photons",
             Arg::VplClamp => "vpl_clamp_m",
+            Arg::ShadowUpdates => "shadow_updates_per_frame",
         }
     }
 }

@@ -673,7 +673,7 @@ fn the_scene_set_on_the_context_is_drawn_lit() {
             LUMI_STATUS_NULL_POINTER
         );
         type Spoil<'a> = &'a dyn Fn(&mut lumi_scene_settings);
-        let cases: [(Spoil, &str); 7] = [
+        let cases: [(Spoil, &str); 8] = [
             (&|s| s.lux_floor_lx = f32::NAN, "settings.lux_floor_lx"),
             (&|s| s.lux_floor_lx = 0.0, "settings.lux_floor_lx"),
             (&|s| s.shadow_budget_bytes = 0, "settings.shadow_budget_bytes"),
@@ -681,6 +681,7 @@ fn the_scene_set_on_the_context_is_drawn_lit() {
             (&|s| s.bounce_photons = 0, "settings.bounce_photons"),
             (&|s| s.bounce_photons = 1 << 17, "settings.bounce_photons"),
             (&|s| s.vpl_clamp_m = f32::NAN, "settings.vpl_clamp_m"),
+            (&|s| s.shadow_updates_per_frame = 0, "settings.shadow_updates_per_frame"),
         ];
         for (f, field) in cases {
             let mut bad = lumi_scene_settings_default();

@@ -72,6 +72,10 @@ pub struct SceneSettings {
     pub bounce_photons: u32,
     /// Distance below which a VPL's 1/r² is held, metres (finite, ≥ 0).
     pub vpl_clamp_m: f32,
+    /// Most luminaires whose shadow maps are rendered again in one frame after they moved (≥ 1);
+    /// the others keep their old maps until a later frame's turn. A new scene, shadow layout or
+    /// atlas renders every luminaire at once.
+    pub shadow_updates_per_frame: u32,
 }
 
 /// Most photons [`SceneSettings::bounce_photons`] may ask for.
@@ -87,6 +91,7 @@ impl Default for SceneSettings {
             indirect: true,
             bounce_photons: 256,
             vpl_clamp_m: 0.25,
+            shadow_updates_per_frame: 32,
         }
     }
 }
@@ -116,6 +121,12 @@ impl SceneSettings {
             return Err(GpuError::invalid(
                 Arg::VplClamp,
                 format!("{} m must be finite and ≥ 0", self.vpl_clamp_m),
+            ));
+        }
+        if self.shadow_updates_per_frame == 0 {
+            return Err(GpuError::invalid(
+                Arg::ShadowUpdates,
+                "at least one luminaire's shadows must be updated per frame",
             ));
         }
         if !(MIN_FACE_PX..=shadows::MAX_ATLAS_SIDE).contains(&self.max_face_px) {
@@ -234,8 +245,11 @@ struct IntensityAtlas {
 /// The shadow maps of the last frame and what they were rendered for.
 #[derive(Debug)]
 struct ShadowCache {
-    key: (u64, ShadowLayout, Vec<[u32; 3]>),
+    /// Scene generation and layout the atlas was made for.
+    key: (u64, ShadowLayout),
     view: wgpu::TextureView,
+    /// Per luminaire (index in the frame's list), the centre its faces were rendered from.
+    rendered: Vec<Option<[u32; 3]>>,
 }
 
 /// What the scene pass used for its last frame (for benchmarks and reports).
@@ -247,8 +261,13 @@ pub struct SceneStats {
     pub vpls: u32,
     /// Side of each shadow cube face, pixels (0: no shadows).
     pub shadow_face_px: u32,
-    /// Times the shadow maps were rendered since the pass was made.
+    /// Frames that rendered shadow maps since the pass was made.
     pub shadow_renders: u64,
+    /// Luminaires whose six faces were rendered, summed over those frames.
+    pub shadow_lights_rendered: u64,
+    /// Luminaires whose shadow maps were left for a later frame (moved, beyond the per-frame
+    /// budget) in the last frame.
+    pub shadows_pending: usize,
     /// Times the virtual point lights were made since the pass was made.
     pub vpl_generations: u64,
 }
@@ -293,6 +312,8 @@ pub struct ScenePass {
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
     face_layout: wgpu::BindGroupLayout,
     shadow_pipeline: wgpu::RenderPipeline,
+    /// Clears a face's square to the far depth (before it is rendered again).
+    clear_pipeline: wgpu::RenderPipeline,
     faces: DrawSlots,
     mesh: Option<SceneMesh>,
     settings: SceneSettings,
@@ -453,6 +474,28 @@ impl ScenePass {
                 multiview_mask: None,
                 cache: None,
             });
+            let clear_pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("scene shadow face clear"),
+                layout: Some(&shadow_layout),
+                vertex: wgpu::VertexState {
+                    module: &shadow_module,
+                    entry_point: Some("vs_clear"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: wgpu::TextureFormat::Depth32Float,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: wgpu::StencilState::default(),
+                    bias: wgpu::DepthBiasState::default(),
+                }),
+                multisample: wgpu::MultisampleState::default(),
+                fragment: None,
+                multiview_mask: None,
+                cache: None,
+            });
             let placeholder_depth = texture(ctx, "no shadow maps", 1, 1, wgpu::TextureFormat::Depth32Float)
                 .create_view(&wgpu::TextureViewDescriptor::default());
             let placeholder_table = texture(ctx, "no intensity tables", 1, 1, wgpu::TextureFormat::R32Float)
@@ -464,6 +507,7 @@ impl ScenePass {
                 pipelines: HashMap::new(),
                 face_layout,
                 shadow_pipeline,
+                clear_pipeline,
                 faces: DrawSlots::new("shadow faces", wgpu::BufferUsages::UNIFORM),
                 mesh: None,
                 settings: SceneSettings::default(),
@@ -754,8 +798,10 @@ impl ScenePass {
         Ok(index)
     }
 
-    /// Renders the shadow maps of `records` unless the cached ones were made for the same scene,
-    /// layout and centres.
+    /// Renders the shadow maps of `records`: all of them into a new atlas when the scene or the
+    /// layout changed; otherwise only those of luminaires whose centre moved since their faces were
+    /// rendered, at most `SceneSettings::shadow_updates_per_frame` of them (lowest index first; the
+    /// rest keep their old faces until a later frame).
     fn shadow_maps(&mut self, ctx: &GpuContext, records: &[LightRecord], layout: ShadowLayout) -> Result<(), GpuError> {
         let Some(mesh) = &self.mesh else {
             return Ok(());
@@ -764,28 +810,46 @@ impl ScenePass {
             .iter()
             .map(|r| [r.centre[0].to_bits(), r.centre[1].to_bits(), r.centre[2].to_bits()])
             .collect();
-        let key = (mesh.generation, layout, centres);
-        if self.shadows.as_ref().is_some_and(|s| s.key == key) {
+        let key = (mesh.generation, layout);
+        let fresh = !self.shadows.as_ref().is_some_and(|s| s.key == key);
+        let rendered: Vec<Option<[u32; 3]>> = match &self.shadows {
+            Some(s) if !fresh => s.rendered.clone(),
+            _ => Vec::new(),
+        };
+        let stale: Vec<usize> = (0..records.len())
+            .filter(|&i| rendered.get(i).copied().flatten() != Some(centres[i]))
+            .collect();
+        let budget = if fresh {
+            usize::MAX
+        } else {
+            self.settings.shadow_updates_per_frame as usize
+        };
+        let now: Vec<usize> = stale.iter().copied().take(budget).collect();
+        self.stats.shadows_pending = stale.len() - now.len();
+        if now.is_empty() {
             return Ok(());
         }
-        let mut faces = Vec::with_capacity(records.len() * 6);
-        for r in records {
-            let c = Vec3::new(r.centre[0], r.centre[1], r.centre[2]);
+        let mut faces = Vec::with_capacity(now.len() * 6);
+        for &i in &now {
+            let c = Vec3::from_array(records[i].centre[..3].try_into().unwrap_or([0.0; 3]));
             for f in 0..6 {
                 faces.push(ShadowFaceUniform {
                     clip_from_world: face_clip_from_world(c, f).to_cols_array_2d(),
                 });
             }
         }
-        let view = ctx.scoped("rendering shadow maps", || {
-            let tex = texture(
+        let view = match (&self.shadows, fresh) {
+            (Some(s), false) => s.view.clone(),
+            _ => texture(
                 ctx,
                 "shadow atlas",
                 layout.width,
                 layout.height,
                 wgpu::TextureFormat::Depth32Float,
-            );
-            let view = tex.create_view(&wgpu::TextureViewDescriptor::default());
+            )
+            .create_view(&wgpu::TextureViewDescriptor::default()),
+        };
+        ctx.scoped("rendering shadow maps", || {
             let bind = self.faces.write(ctx, &self.face_layout, &faces).clone();
             let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("scene shadow maps"),
@@ -797,7 +861,11 @@ impl ScenePass {
                     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                         view: &view,
                         depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Clear(0.0),
+                            load: if fresh {
+                                wgpu::LoadOp::Clear(0.0)
+                            } else {
+                                wgpu::LoadOp::Load
+                            },
                             store: wgpu::StoreOp::Store,
                         }),
                         stencil_ops: None,
@@ -806,24 +874,35 @@ impl ScenePass {
                     occlusion_query_set: None,
                     multiview_mask: None,
                 });
-                pass.set_pipeline(&self.shadow_pipeline);
-                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-                for light in 0..records.len() {
+                for (k, &light) in now.iter().enumerate() {
                     for f in 0..6 {
                         let (x, y) = layout.face_origin(light, f);
                         let s = layout.face_px;
                         pass.set_viewport(x as f32, y as f32, s as f32, s as f32, 0.0, 1.0);
                         pass.set_scissor_rect(x, y, s, s);
-                        pass.set_bind_group(0, &bind, &[((6 * light + f) as u64 * SLOT) as u32]);
+                        pass.set_bind_group(0, &bind, &[((6 * k + f) as u64 * SLOT) as u32]);
+                        if !fresh {
+                            pass.set_pipeline(&self.clear_pipeline);
+                            pass.draw(0..3, 0..1);
+                        }
+                        pass.set_pipeline(&self.shadow_pipeline);
+                        pass.set_vertex_buffer(0, mesh.vertices.slice(..));
                         pass.draw(0..mesh.count, 0..1);
                     }
                 }
             }
             ctx.queue.submit([enc.finish()]);
-            Ok(view)
+            Ok(())
         })?;
+        let mut rendered = rendered;
+        rendered.resize(records.len(), None);
+        rendered.truncate(records.len());
+        for &i in &now {
+            rendered[i] = Some(centres[i]);
+        }
         self.stats.shadow_renders += 1;
-        self.shadows = Some(ShadowCache { key, view });
+        self.stats.shadow_lights_rendered += now.len() as u64;
+        self.shadows = Some(ShadowCache { key, view, rendered });
         Ok(())
     }
 
