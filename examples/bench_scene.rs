@@ -305,7 +305,7 @@ fn run(a: &Args) -> Res<serde_json::Value> {
             let (moved_ms, _) = median_ms(
                 || {
                     k += 1;
-                    let dx = if k % 2 == 0 { 0.0 } else { 0.01 };
+                    let dx = if k.is_multiple_of(2) { 0.0 } else { 0.01 };
                     r.set_transform(ids[0], Mat4::from_translation(Vec3::new(dx, 0.0, 0.0)) * base)?;
                     r.render(&mut target, &cam, &opts)?;
                     Ok(())

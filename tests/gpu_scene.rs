@@ -964,3 +964,82 @@ fn moved_luminaires_update_their_shadows_within_the_per_frame_budget() {
         "incremental shadow maps differ from fresh ones by up to {worst}"
     );
 }
+
+#[test]
+fn textured_surfaces_reflect_their_texels() {
+    // The office's rug (white × a 2 × 2 sRGB checker, nearest, repeating every 0.4 m) under a
+    // point luminaire, seen from above: each rug pixel's luminance is ρ_Y(texel)·E/π with ρ from
+    // the CPU's texture sampling at the pixel ray's hit and E the exact direct term.
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
+    let scene = lumiview::scene::load(&glb).unwrap();
+    let bvh = Bvh::build(&scene);
+    let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
+    let lights = vec![(p.clone(), placement(0.0, 2.8, -1.0, 0.0))];
+    let (w, hgt) = (96u32, 64u32);
+    let cam = perspective(
+        Vec3::new(0.0, 2.2, -0.2),
+        Vec3::new(0.0, 0.0, -1.0),
+        60.0,
+        w as f32 / hgt as f32,
+    );
+    let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
+    let tracer = Tracer::new(
+        &scene,
+        &[SceneLuminaire {
+            photometry: p,
+            scene_from_luminaire: lights[0].1,
+        }],
+    )
+    .unwrap();
+    let (mut n, mut worst, mut dark, mut light) = (0, 0.0f64, 0, 0);
+    for j in 0..hgt {
+        for i in 0..w {
+            let (o, d) = pixel_ray(&cam, w, hgt, i, j);
+            let Some(hit) = bvh.closest_hit(o, d, 1e3) else {
+                continue;
+            };
+            let m = &scene.materials()[scene.material_of()[hit.triangle] as usize];
+            if m.base_color_texture.is_none() {
+                continue;
+            }
+            // Away from the checker's edges (texel size 0.2 m): the pixel's footprint is ~1 cm.
+            let x = o + d * hit.t;
+            let edge = |v: f64| {
+                let f = (v / 0.2).rem_euclid(1.0);
+                f.min(1.0 - f) * 0.2
+            };
+            if edge(x.x + 1.0) < 0.02 || edge(x.z + 1.7) < 0.02 {
+                continue;
+            }
+            let rho = scene.reflectance_y(hit.triangle, hit.b1, hit.b2);
+            let e = tracer
+                .illuminance(
+                    &[SurfacePoint {
+                        position_m: x,
+                        normal: DVec3::Y,
+                    }],
+                    &TraceOptions {
+                        paths_per_point: 0,
+                        direct_estimates: 1,
+                        ..TraceOptions::default()
+                    },
+                )
+                .unwrap()[0]
+                .direct_lx;
+            let want = rho * e / std::f64::consts::PI;
+            let got = lum[(j * w + i) as usize];
+            worst = worst.max((got / want - 1.0).abs());
+            n += 1;
+            if rho < 0.2 {
+                dark += 1;
+            } else {
+                light += 1;
+            }
+        }
+    }
+    println!("rug: {n} pixels ({dark} on dark squares, {light} on light), worst relative error {worst:.2e}");
+    assert!(dark > 50 && light > 50, "{dark} dark, {light} light rug pixels");
+    assert!(worst < 0.01, "worst {worst}");
+}

@@ -69,11 +69,24 @@ struct Light {
 @group(0) @binding(4) var shadow_atlas: texture_depth_2d;
 // frame.indirect.x of them (the buffer holds at least one).
 @group(0) @binding(5) var<storage, read> vpls: array<Vpl>;
+// The scene's base-colour textures (sRGB, read as linear), one rectangle each.
+@group(0) @binding(6) var textures: texture_2d<f32>;
+@group(0) @binding(7) var<storage, read> texture_records: array<TextureRecord>;
+
+// Where a material's texture lies in `textures` and how it is sampled (gpu::scene::TextureRecord).
+struct TextureRecord {
+    // x, y of its top-left texel; width, height.
+    rect: vec4<u32>,
+    // Wrap s, wrap t (0 repeat, 1 clamp to edge, 2 mirrored repeat), filter (0 nearest, 1 linear).
+    mode: vec4<u32>,
+};
 
 struct VsIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) reflectance: vec3<f32>,
+    @location(3) uv: vec2<f32>,
+    @location(4) texture: f32,
 };
 
 struct VsOut {
@@ -81,6 +94,9 @@ struct VsOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) reflectance: vec3<f32>,
+    @location(3) uv: vec2<f32>,
+    // The texture record + 1 (0: none).
+    @location(4) @interpolate(flat) texture: u32,
 };
 
 @vertex
@@ -90,6 +106,8 @@ fn vs_scene(v: VsIn) -> VsOut {
     out.world = v.position;
     out.normal = v.normal;
     out.reflectance = v.reflectance;
+    out.uv = v.uv;
+    out.texture = u32(v.texture + 0.5);
     return out;
 }
 
@@ -305,6 +323,44 @@ fn indirect_lx(x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return e;
 }
 
+// A texel index in 0…n−1 of the (possibly outside) index i under wrap mode `mode`.
+fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    if (mode == 1u) {
+        return clamp(i, 0, n - 1);
+    }
+    if (mode == 2u) {
+        let m = ((i % (2 * n)) + 2 * n) % (2 * n);
+        return select(2 * n - 1 - m, m, m < n);
+    }
+    return ((i % n) + n) % n;
+}
+
+// The linear RGB of texture record r at uv, as scene::texture samples it (⌊u·w⌋ for nearest; the
+// four texels around u·w − ½ for linear; glTF's wrap modes).
+fn texture_rgb(r: TextureRecord, uv_in: vec2<f32>) -> vec3<f32> {
+    let far = 1048576.0;
+    let uv = clamp(uv_in, vec2<f32>(-far), vec2<f32>(far));
+    let origin = vec2<i32>(r.rect.xy);
+    let n = vec2<i32>(r.rect.zw);
+    let p = uv * vec2<f32>(n) - 0.5;
+    if (r.mode.z == 0u) {
+        let i = wrap_texel(i32(floor(p.x + 0.5)), n.x, r.mode.x);
+        let j = wrap_texel(i32(floor(p.y + 0.5)), n.y, r.mode.y);
+        return textureLoad(textures, origin + vec2<i32>(i, j), 0).rgb;
+    }
+    let f = floor(p);
+    let t = p - f;
+    let i0 = wrap_texel(i32(f.x), n.x, r.mode.x);
+    let i1 = wrap_texel(i32(f.x) + 1, n.x, r.mode.x);
+    let j0 = wrap_texel(i32(f.y), n.y, r.mode.y);
+    let j1 = wrap_texel(i32(f.y) + 1, n.y, r.mode.y);
+    let a = textureLoad(textures, origin + vec2<i32>(i0, j0), 0).rgb;
+    let b = textureLoad(textures, origin + vec2<i32>(i1, j0), 0).rgb;
+    let c = textureLoad(textures, origin + vec2<i32>(i0, j1), 0).rgb;
+    let d = textureLoad(textures, origin + vec2<i32>(i1, j1), 0).rgb;
+    return mix(mix(a, b, t.x), mix(c, d, t.x), t.y);
+}
+
 fn scene_color(in: VsOut) -> vec4<f32> {
     var to_eye = frame.eye.xyz;
     if (frame.eye.w > 0.5) {
@@ -316,7 +372,11 @@ fn scene_color(in: VsOut) -> vec4<f32> {
         n = -n;
     }
     let e = vec3<f32>(direct_lx(in.clip.xy, in.world, n)) + indirect_lx(in.world, n);
-    let l = in.reflectance * (e / PI);
+    var rho = in.reflectance;
+    if (in.texture > 0u) {
+        rho = rho * texture_rgb(texture_records[in.texture - 1u], in.uv);
+    }
+    let l = rho * (e / PI);
     if (frame.params.y > 0.5) {
         let exposure = frame.params.x;
         return vec4<f32>(reinhard(l.r, exposure), reinhard(l.g, exposure), reinhard(l.b, exposure), 1.0);

@@ -250,6 +250,13 @@ mod tests {
         );
         assert_same(
             "scene",
+            "TextureRecord",
+            wgsl_layout(&m, "TextureRecord"),
+            "TextureRecord",
+            rust_layout!(super::super::scene::TextureRecord { rect, mode }),
+        );
+        assert_same(
+            "scene",
             "Vpl",
             wgsl_layout(&m, "Vpl"),
             "VplRecord",

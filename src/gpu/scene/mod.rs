@@ -170,11 +170,13 @@ pub struct ShadowFaceUniform {
     pub clip_from_world: [[f32; 4]; 4],
 }
 
-/// Floats per vertex: position, normal, linear RGB reflectance.
-const VERTEX_FLOATS: usize = 9;
+/// Floats per vertex: position, normal, linear RGB reflectance (the base colour factor), texture
+/// coordinates, and the texture record + 1 (0: untextured) as an exact small float.
+const VERTEX_FLOATS: usize = 12;
 
-const SCENE_ATTRIBUTES: [wgpu::VertexAttribute; 3] =
-    wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3];
+const SCENE_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x2, 4 => Float32
+];
 const SCENE_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: (VERTEX_FLOATS * 4) as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
@@ -187,38 +189,187 @@ const SHADOW_VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBuff
     attributes: &SHADOW_ATTRIBUTES,
 };
 
-/// The vertices of a scene as the pass draws them (see the module's promises).
-pub fn scene_vertices(scene: &Scene) -> Vec<f32> {
-    let mean: Vec<[f32; 3]> = scene
-        .materials()
-        .iter()
-        .map(|m| {
-            let t = m.base_color_texture.as_ref().and_then(|t| {
-                let img = scene.images().get(t.image)?;
-                let (w, h) = (img.width(), img.height());
-                let mut sum = [0.0f64; 3];
-                for j in 0..h {
-                    for i in 0..w {
-                        let u = (f64::from(i) + 0.5) / f64::from(w);
-                        let v = (f64::from(j) + 0.5) / f64::from(h);
-                        let s = img.sample_linear(u, v, t);
-                        (0..3).for_each(|k| sum[k] += s[k]);
-                    }
+/// Where a material's base-colour texture lies in the texture atlas and how it is sampled
+/// (`TextureRecord` in shaders/scene/lighting.wgsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct TextureRecord {
+    /// Atlas x, y of the image's top-left texel; its width and height in texels.
+    pub rect: [u32; 4],
+    /// Wrap in s and t (0 repeat, 1 clamp to edge, 2 mirrored repeat), filter (0 nearest, 1
+    /// linear), unused.
+    pub mode: [u32; 4],
+}
+
+/// The base-colour textures of a scene packed for the GPU: one sRGB atlas (RGBA8) and a record
+/// per textured material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureAtlas {
+    /// Atlas width and height, texels.
+    pub size: (u32, u32),
+    /// RGBA8 sRGB texels, row-major.
+    pub texels: Vec<u8>,
+    /// Per material: its record's index, or `None` without a texture.
+    pub record_of_material: Vec<Option<u32>>,
+    /// The records.
+    pub records: Vec<TextureRecord>,
+    /// Images stored at a lower resolution to fit (image index, the divisor).
+    pub reduced: Vec<(usize, u32)>,
+}
+
+/// An image at 1/`k` of its resolution in each direction (box average of each k × k block in
+/// linear light, encoded back to sRGB), as RGBA8 rows.
+fn reduced_rgba(img: &crate::scene::texture::Image, k: u32) -> (u32, u32, Vec<u8>) {
+    let (w, h) = (img.width().div_ceil(k), img.height().div_ceil(k));
+    let nearest = crate::scene::texture::TextureRef {
+        image: 0,
+        tex_coord: 0,
+        wrap_s: crate::scene::texture::Wrap::ClampToEdge,
+        wrap_t: crate::scene::texture::Wrap::ClampToEdge,
+        filter: crate::scene::texture::Filter::Nearest,
+    };
+    let encode = |c: f64| {
+        let c = c.clamp(0.0, 1.0);
+        let s = if c <= 0.003_130_8 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0).round() as u8
+    };
+    let mut out = Vec::with_capacity((w * h * 4) as usize);
+    for j in 0..h {
+        for i in 0..w {
+            let mut sum = [0.0f64; 3];
+            let mut n = 0.0;
+            for y in (j * k)..((j + 1) * k).min(img.height()) {
+                for x in (i * k)..((i + 1) * k).min(img.width()) {
+                    let u = (f64::from(x) + 0.5) / f64::from(img.width());
+                    let v = (f64::from(y) + 0.5) / f64::from(img.height());
+                    let t = img.sample_linear(u, v, &nearest);
+                    (0..3).for_each(|c| sum[c] += t[c]);
+                    n += 1.0;
                 }
-                let n = f64::from(w) * f64::from(h);
-                Some(sum.map(|s| s / n.max(1.0)))
-            });
-            let t = t.unwrap_or([1.0; 3]);
-            std::array::from_fn(|k| (m.base_color_factor[k] * t[k]) as f32)
-        })
-        .collect();
+            }
+            out.extend_from_slice(&[encode(sum[0] / n), encode(sum[1] / n), encode(sum[2] / n), 255]);
+        }
+    }
+    (w, h, out)
+}
+
+impl TextureAtlas {
+    /// Packs the images that `scene`'s materials use as base colour into shelves of an atlas at
+    /// most `max_side` texels wide and high; images are halved (box average in linear light) until
+    /// all fit.
+    pub fn of(scene: &Scene, max_side: u32) -> TextureAtlas {
+        let used: Vec<usize> = {
+            let mut v: Vec<usize> = scene
+                .materials()
+                .iter()
+                .filter_map(|m| m.base_color_texture.as_ref().map(|t| t.image))
+                .filter(|&i| i < scene.images().len())
+                .collect();
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let side = max_side.clamp(1, shadows::MAX_ATLAS_SIDE);
+        // Shelf packing at divisor k for every image; k doubles until it fits.
+        let mut k = 1u32;
+        let (size, places) = loop {
+            let mut places = Vec::with_capacity(used.len());
+            let (mut x, mut y, mut shelf, mut width) = (0u32, 0u32, 0u32, 1u32);
+            let mut fits = true;
+            for &i in &used {
+                let img = &scene.images()[i];
+                let (w, h) = (img.width().div_ceil(k), img.height().div_ceil(k));
+                if w > side || h > side {
+                    fits = false;
+                    break;
+                }
+                if x + w > side {
+                    y += shelf;
+                    x = 0;
+                    shelf = 0;
+                }
+                places.push((x, y, w, h));
+                x += w;
+                shelf = shelf.max(h);
+                width = width.max(x);
+            }
+            if fits && y + shelf <= side {
+                break ((width, (y + shelf).max(1)), places);
+            }
+            k *= 2;
+        };
+        let mut texels = vec![0u8; (size.0 * size.1 * 4) as usize];
+        let mut reduced = Vec::new();
+        for (&i, &(x, y, w, _)) in used.iter().zip(&places) {
+            if k > 1 {
+                reduced.push((i, k));
+            }
+            let (_, h, rows) = reduced_rgba(&scene.images()[i], k);
+            for r in 0..h {
+                let src = &rows[(r * w * 4) as usize..((r + 1) * w * 4) as usize];
+                let o = (((y + r) * size.0 + x) * 4) as usize;
+                texels[o..o + src.len()].copy_from_slice(src);
+            }
+        }
+        let mut records = Vec::new();
+        let record_of_material = scene
+            .materials()
+            .iter()
+            .map(|m| {
+                let t = m.base_color_texture.as_ref()?;
+                let slot = used.iter().position(|&i| i == t.image)?;
+                let (x, y, w, h) = places[slot];
+                let wrap = |w: crate::scene::texture::Wrap| match w {
+                    crate::scene::texture::Wrap::Repeat => 0,
+                    crate::scene::texture::Wrap::ClampToEdge => 1,
+                    crate::scene::texture::Wrap::MirroredRepeat => 2,
+                };
+                records.push(TextureRecord {
+                    rect: [x, y, w, h],
+                    mode: [
+                        wrap(t.wrap_s),
+                        wrap(t.wrap_t),
+                        u32::from(t.filter == crate::scene::texture::Filter::Linear),
+                        0,
+                    ],
+                });
+                Some(records.len() as u32 - 1)
+            })
+            .collect();
+        TextureAtlas {
+            size,
+            texels,
+            record_of_material,
+            records,
+            reduced,
+        }
+    }
+}
+
+/// The vertices of a scene as the pass draws them (see the module's promises), with `atlas`'s
+/// record of each textured material.
+pub fn scene_vertices(scene: &Scene, atlas: &TextureAtlas) -> Vec<f32> {
     let mut out = Vec::with_capacity(scene.triangles().len() * 3 * VERTEX_FLOATS);
-    for (tri, m) in scene.triangles().iter().zip(scene.material_of()) {
+    for (t, (tri, m)) in scene.triangles().iter().zip(scene.material_of()).enumerate() {
         let n = (tri[1] - tri[0]).cross(tri[2] - tri[0]).normalize_or_zero().as_vec3();
-        let rho = mean.get(*m as usize).copied().unwrap_or([1.0; 3]);
-        for v in tri {
+        let material = scene.materials().get(*m as usize);
+        let rho = material.map_or([1.0; 3], |m| m.base_color_factor.map(|c| c as f32));
+        let record = atlas
+            .record_of_material
+            .get(*m as usize)
+            .copied()
+            .flatten()
+            .map_or(0.0, |r| (r + 1) as f32);
+        let uvs = scene.uvs().get(t).copied().unwrap_or([[0.0; 2]; 3]);
+        for (v, uv) in tri.iter().zip(uvs) {
             let p = v.as_vec3();
-            out.extend_from_slice(&[p.x, p.y, p.z, n.x, n.y, n.z, rho[0], rho[1], rho[2]]);
+            out.extend_from_slice(&[
+                p.x, p.y, p.z, n.x, n.y, n.z, rho[0], rho[1], rho[2], uv[0], uv[1], record,
+            ]);
         }
     }
     out
@@ -230,6 +381,11 @@ struct SceneMesh {
     vertices: wgpu::Buffer,
     count: u32,
     generation: u64,
+    /// The base-colour texture atlas (sRGB) and its records.
+    textures: wgpu::TextureView,
+    texture_records: wgpu::Buffer,
+    /// Images stored at a lower resolution to fit the atlas.
+    reduced_textures: usize,
 }
 
 /// The intensity tables of the photometries of the last frame.
@@ -268,6 +424,8 @@ pub struct SceneStats {
     /// Luminaires whose shadow maps were left for a later frame (moved, beyond the per-frame
     /// budget) in the last frame.
     pub shadows_pending: usize,
+    /// Base-colour images of the scene stored at a lower resolution to fit the texture atlas.
+    pub reduced_textures: usize,
     /// Times the virtual point lights were made since the pass was made.
     pub vpl_generations: u64,
 }
@@ -424,6 +582,8 @@ impl ScenePass {
                     texture_entry(3, wgpu::TextureSampleType::Float { filterable: false }),
                     texture_entry(4, wgpu::TextureSampleType::Depth),
                     storage_entry(5),
+                    texture_entry(6, wgpu::TextureSampleType::Float { filterable: false }),
+                    storage_entry(7),
                 ],
             });
             let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -546,8 +706,9 @@ impl ScenePass {
                 ),
             ));
         }
-        let vertices = scene_vertices(&scene);
-        let buf = ctx.scoped("uploading a scene", || {
+        let atlas = TextureAtlas::of(&scene, ctx.device.limits().max_texture_dimension_2d);
+        let vertices = scene_vertices(&scene, &atlas);
+        let (buf, texture, records) = ctx.scoped("uploading a scene", || {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("scene vertices"),
                 size: bytes,
@@ -555,13 +716,43 @@ impl ScenePass {
                 mapped_at_creation: false,
             });
             ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(&vertices));
-            Ok(buf)
+            let (w, h) = atlas.size;
+            let tex = texture(ctx, "scene textures (sRGB)", w, h, wgpu::TextureFormat::Rgba8UnormSrgb);
+            ctx.queue.write_texture(
+                wgpu::TexelCopyTextureInfo {
+                    texture: &tex,
+                    mip_level: 0,
+                    origin: wgpu::Origin3d::ZERO,
+                    aspect: wgpu::TextureAspect::All,
+                },
+                &atlas.texels,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(w * 4),
+                    rows_per_image: None,
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+            );
+            let records = if atlas.records.is_empty() {
+                vec![TextureRecord::zeroed()]
+            } else {
+                atlas.records.clone()
+            };
+            let records = storage_buffer(ctx, "scene texture records", bytemuck::cast_slice(&records));
+            Ok((buf, tex.create_view(&wgpu::TextureViewDescriptor::default()), records))
         })?;
         self.generations += 1;
         self.mesh = Some(SceneMesh {
             vertices: buf,
             count: (vertices.len() / VERTEX_FLOATS) as u32,
             generation: self.generations,
+            textures: texture,
+            texture_records: records,
+            reduced_textures: atlas.reduced.len(),
         });
         self.shadows = None;
         self.vpls = None;
@@ -1017,6 +1208,7 @@ impl Pass for ScenePass {
         }
         let vpl_count = self.virtual_lights(ctx, instances)?;
         self.stats.luminaires = records.len();
+        self.stats.reduced_textures = self.mesh.as_ref().map_or(0, |m| m.reduced_textures);
         self.stats.vpls = vpl_count;
         self.stats.shadow_face_px = layout.map_or(0, |l| l.face_px);
         let options = view.options();
@@ -1044,6 +1236,9 @@ impl Pass for ScenePass {
             reversed_z: view.camera().reversed_z,
         };
         let pipeline = self.pipeline(ctx, key)?;
+        let Some(mesh) = &self.mesh else {
+            return Ok(SceneFrame::default());
+        };
         let bind = ctx.scoped("binding a scene frame", || {
             let frame_buf = storage_buffer(ctx, "scene frame", bytemuck::bytes_of(&uniform));
             let lights_buf = storage_buffer(ctx, "scene luminaires", bytemuck::cast_slice(&records));
@@ -1083,6 +1278,14 @@ impl Pass for ScenePass {
                             (Some(v), 1..) => v.buffer.as_entire_binding(),
                             _ => self.no_vpls.as_entire_binding(),
                         },
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: wgpu::BindingResource::TextureView(&mesh.textures),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: mesh.texture_records.as_entire_binding(),
                     },
                 ],
             }))
@@ -1124,4 +1327,98 @@ struct SceneDraw {
 #[derive(Debug, Default)]
 pub struct SceneFrame {
     draw: Option<SceneDraw>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::texture::{Filter, Image, TextureRef, Wrap};
+    use crate::scene::{Material, SceneParts};
+    use glam::DVec3;
+
+    /// A scene of one triangle per image, each image `w × h` of one sRGB code per texel row.
+    fn textured(sizes: &[(u32, u32)]) -> Scene {
+        let mut p = SceneParts::default();
+        for (k, &(w, h)) in sizes.iter().enumerate() {
+            let texels = (0..w * h).map(|t| [(t / w) as u8, k as u8, 7]).collect();
+            p.images.push(Image::from_srgb(w, h, texels).unwrap());
+            p.materials.push(Material {
+                base_color_factor: [1.0; 3],
+                base_color_texture: Some(TextureRef {
+                    image: k,
+                    tex_coord: 0,
+                    wrap_s: Wrap::MirroredRepeat,
+                    wrap_t: Wrap::ClampToEdge,
+                    filter: Filter::Linear,
+                }),
+            });
+            p.triangles.push([DVec3::ZERO, DVec3::X, DVec3::Z]);
+            p.material_of.push(k as u32);
+            p.uvs.push([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]);
+        }
+        p.materials.push(Material::grey(0.5));
+        p.triangles.push([DVec3::ZERO, DVec3::X, DVec3::Y]);
+        p.material_of.push(sizes.len() as u32);
+        p.uvs.push([[0.0; 2]; 3]);
+        Scene::new(p).unwrap()
+    }
+
+    #[test]
+    fn the_texture_atlas_holds_every_image_once_and_in_place() {
+        let scene = textured(&[(5, 3), (2, 2), (7, 4)]);
+        let a = TextureAtlas::of(&scene, 8);
+        assert!(a.reduced.is_empty());
+        assert_eq!(a.records.len(), 3);
+        assert_eq!(a.record_of_material, vec![Some(0), Some(1), Some(2), None]);
+        assert!(a.size.0 <= 8 && a.size.1 <= 8);
+        let rects: Vec<[u32; 4]> = a.records.iter().map(|r| r.rect).collect();
+        for (k, r) in rects.iter().enumerate() {
+            assert!(
+                r[0] + r[2] <= a.size.0 && r[1] + r[3] <= a.size.1,
+                "{r:?} in {:?}",
+                a.size
+            );
+            for o in &rects[k + 1..] {
+                let apart = r[0] + r[2] <= o[0] || o[0] + o[2] <= r[0] || r[1] + r[3] <= o[1] || o[1] + o[3] <= r[1];
+                assert!(apart, "{r:?} overlaps {o:?}");
+            }
+            // Texel (x, y) of image k is (y, k, 7).
+            for y in 0..r[3] {
+                for x in 0..r[2] {
+                    let i = (((r[1] + y) * a.size.0 + r[0] + x) * 4) as usize;
+                    assert_eq!(&a.texels[i..i + 4], &[y as u8, k as u8, 7, 255]);
+                }
+            }
+        }
+        assert_eq!(a.records[0].mode, [2, 1, 1, 0]);
+        // The vertices carry each material's record + 1 (0: untextured) and the UVs.
+        let v = scene_vertices(&scene, &a);
+        assert_eq!(v.len(), 4 * 3 * VERTEX_FLOATS);
+        assert_eq!(v[VERTEX_FLOATS - 1], 1.0);
+        assert_eq!(v[3 * VERTEX_FLOATS + VERTEX_FLOATS - 1], 2.0);
+        assert_eq!(v[9 * VERTEX_FLOATS + VERTEX_FLOATS - 1], 0.0);
+        assert_eq!(&v[VERTEX_FLOATS + 9..VERTEX_FLOATS + 11], &[1.0, 0.0]);
+    }
+
+    #[test]
+    fn images_too_large_for_the_atlas_are_halved_until_they_fit() {
+        let scene = textured(&[(16, 16), (16, 8)]);
+        let a = TextureAtlas::of(&scene, 16);
+        assert_eq!(a.reduced, vec![(0, 2), (1, 2)]);
+        assert_eq!(a.records[0].rect[2..], [8, 8]);
+        assert_eq!(a.records[1].rect[2..], [8, 4]);
+        // A 2 × 2 block of rows 0 and 1 (codes 0 and 1) averages in linear light.
+        let want = {
+            let lin = |c: u8| crate::scene::texture::srgb_to_linear(c);
+            let m = (lin(0) + lin(1)) / 2.0;
+            let s = if m <= 0.003_130_8 {
+                12.92 * m
+            } else {
+                1.055 * m.powf(1.0 / 2.4) - 0.055
+            };
+            (s * 255.0).round() as u8
+        };
+        let r = a.records[0].rect;
+        assert_eq!(a.texels[((r[1] * a.size.0 + r[0]) * 4) as usize], want);
+    }
 }
