@@ -1,16 +1,20 @@
-// Scene lighting pass, direct light (issue 20; docs/scene-lighting.md, "The GPU pass"): the scene's
-// triangles drawn from the host's camera, each fragment lit by every photometric luminaire whose
-// influence sphere reaches it (the fragment's screen tile lists them), with visibility from the
-// luminaires' cube shadow maps. Output: L = ρ·E/π per RGB channel (Lambertian; the luminance Y of
-// the colour is ρ_Y·E/π in cd/m²), or its Reinhard-tone-mapped display value; plus the R32F depth.
+// Scene lighting pass (issue 20; docs/scene-lighting.md, "The GPU pass" and "Inter-reflection"):
+// the scene's triangles drawn from the host's camera, each fragment lit by every photometric
+// luminaire whose influence sphere reaches it (the fragment's screen tile lists them), with
+// visibility from the luminaires' cube shadow maps, plus the inter-reflected light of the virtual
+// point lights (scene::vpl), reflectance from the base colour and its texture. Output: L = ρ·E/π
+// per RGB channel (Lambertian; the luminance Y of the colour is ρ_Y·E/π in cd/m²), or its
+// Reinhard-tone-mapped display value; plus the R32F depth.
 //
 // Direct illuminance of one luminaire at x (normal n, turned towards the eye): its opening is cut
 // into na × nb stratified points s_k (the midpoints of the cells of its parameterisation, uniform
-// in area; one point, the photometric centre, when it has no area); each carries I(x − s_k)/N:
+// in area; fewer where the opening looks small from x, OPENING_POINT_RAD; one point, the
+// photometric centre, when it has no area); each carries I(x − s_k)/N:
 //   E = Σ_k I(x − s_k)/N · max(0, n·(s_k − x)) / |s_k − x|³ · V_k.
 // V_k comes from the cube shadow map rendered from the photometric centre c (depth along the face
 // axis, reversed and infinite: depth = SHADOW_NEAR_M / distance along the axis), PCSS-like:
-//   1. blocker search: points b on each segment x → s_k (at 1/4, 1/2, 3/4) are looked up; a texel
+//   1. blocker search: points b on the segments x → s_k towards at most SEARCH_GRID² of the
+//      opening's points (at SEARCH_AT of their length) are looked up; a texel
 //      occludes b when its surface lies nearer to c than (1 + SHADOW_REACH)·|b − c| and nearer
 //      than the receiver plane (through x, normal n) along the texel centre's own ray (so the
 //      receiver's plane never shadows itself);
@@ -231,6 +235,9 @@ const OPENING_POINT_RAD: f32 = 0.02;
 // a texel counts up to (1 + SHADOW_REACH) times the point's distance from the centre.
 const SEARCH_AT = array<f32, 5>(0.03125, 0.125, 0.25, 0.5, 0.75);
 
+// Opening points per axis the blocker search looks towards.
+const SEARCH_GRID: u32 = 3u;
+
 // Direct illuminance (lx) at x (normal n facing the side lit) from one luminaire.
 fn light_lx(light: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
     let c = light.centre.xyz;
@@ -247,9 +254,13 @@ fn light_lx(light: Light, x: vec3<f32>, n: vec3<f32>) -> f32 {
     // 1. Blocker search.
     var blockers = 0.0;
     var blocker_sum_m = 0.0;
+    // The search looks towards at most 3 × 3 points of the opening (its coarser stratification):
+    // the blocker depth varies slowly across an opening, the visibility test below uses every point.
+    let sa = min(na, SEARCH_GRID);
+    let sb = min(nb, SEARCH_GRID);
     if (shadows) {
-        for (var k = 0u; k < count; k = k + 1u) {
-            let s = opening_point(light, k, na, nb);
+        for (var k = 0u; k < sa * sb; k = k + 1u) {
+            let s = opening_point(light, k, sa, sb);
             for (var j = 0u; j < 5u; j = j + 1u) {
                 let b = x + (s - x) * SEARCH_AT[j];
                 let o = occluder_m(light, b, x, n);
