@@ -261,7 +261,10 @@ impl TextureAtlas {
     /// Packs the images that `scene`'s materials use as base colour into shelves of an atlas at
     /// most `max_side` texels wide and high; images are halved (box average in linear light) until
     /// all fit.
-    pub fn of(scene: &Scene, max_side: u32) -> TextureAtlas {
+    ///
+    /// Errors: `InvalidArgument` (`Arg::Scene`) when even 1 × 1 texel images would not fit (more
+    /// images than the atlas has texels); `OutOfMemory` when the atlas cannot be allocated.
+    pub fn of(scene: &Scene, max_side: u32) -> Result<TextureAtlas, GpuError> {
         let used: Vec<usize> = {
             let mut v: Vec<usize> = scene
                 .materials()
@@ -277,6 +280,12 @@ impl TextureAtlas {
         // Shelf packing at divisor k for every image; k doubles until it fits.
         let mut k = 1u32;
         let (size, places) = loop {
+            if k > 1 << 24 {
+                return Err(GpuError::invalid(
+                    Arg::Scene,
+                    format!("{} texture images do not fit a {side} × {side} atlas", used.len()),
+                ));
+            }
             let mut places = Vec::with_capacity(used.len());
             let (mut x, mut y, mut shelf, mut width) = (0u32, 0u32, 0u32, 1u32);
             let mut fits = true;
@@ -302,7 +311,10 @@ impl TextureAtlas {
             }
             k *= 2;
         };
-        let mut texels = vec![0u8; (size.0 * size.1 * 4) as usize];
+        let n = size.0 as usize * size.1 as usize * 4;
+        let mut texels = crate::files::try_vec::<u8>(n, "the scene's texture atlas")
+            .map_err(|e| GpuError::OutOfMemory(e.to_string()))?;
+        texels.resize(n, 0);
         let mut reduced = Vec::new();
         for (&i, &(x, y, w, _)) in used.iter().zip(&places) {
             if k > 1 {
@@ -340,13 +352,13 @@ impl TextureAtlas {
                 Some(records.len() as u32 - 1)
             })
             .collect();
-        TextureAtlas {
+        Ok(TextureAtlas {
             size,
             texels,
             record_of_material,
             records,
             reduced,
-        }
+        })
     }
 }
 
@@ -706,7 +718,7 @@ impl ScenePass {
                 ),
             ));
         }
-        let atlas = TextureAtlas::of(&scene, ctx.device.limits().max_texture_dimension_2d);
+        let atlas = TextureAtlas::of(&scene, ctx.device.limits().max_texture_dimension_2d)?;
         let vertices = scene_vertices(&scene, &atlas);
         let (buf, texture, records) = ctx.scoped("uploading a scene", || {
             let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -1366,7 +1378,7 @@ mod tests {
     #[test]
     fn the_texture_atlas_holds_every_image_once_and_in_place() {
         let scene = textured(&[(5, 3), (2, 2), (7, 4)]);
-        let a = TextureAtlas::of(&scene, 8);
+        let a = TextureAtlas::of(&scene, 8).unwrap();
         assert!(a.reduced.is_empty());
         assert_eq!(a.records.len(), 3);
         assert_eq!(a.record_of_material, vec![Some(0), Some(1), Some(2), None]);
@@ -1403,7 +1415,7 @@ mod tests {
     #[test]
     fn images_too_large_for_the_atlas_are_halved_until_they_fit() {
         let scene = textured(&[(16, 16), (16, 8)]);
-        let a = TextureAtlas::of(&scene, 16);
+        let a = TextureAtlas::of(&scene, 16).unwrap();
         assert_eq!(a.reduced, vec![(0, 2), (1, 2)]);
         assert_eq!(a.records[0].rect[2..], [8, 8]);
         assert_eq!(a.records[1].rect[2..], [8, 4]);
@@ -1420,5 +1432,7 @@ mod tests {
         };
         let r = a.records[0].rect;
         assert_eq!(a.texels[((r[1] * a.size.0 + r[0]) * 4) as usize], want);
+        // More images than a 1 × 1 atlas has texels: an error, not a loop.
+        assert!(TextureAtlas::of(&scene, 1).is_err());
     }
 }
