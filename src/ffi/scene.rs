@@ -310,7 +310,8 @@ pub unsafe extern "C" fn lumi_context_set_scene(ctx: *mut lumi_context, scene: l
 ///
 /// Errors: `LUMI_STATUS_NULL_POINTER` (`settings`), `LUMI_STATUS_INVALID_ARGUMENT` naming the
 /// field (`settings.lux_floor_lx` not finite or not > 0, `settings.shadow_budget_bytes` 0,
-/// `settings.max_face_px` outside 16…8192).
+/// `settings.max_face_px` outside 16…8192, `settings.bounce_photons` outside 1…65,536,
+/// `settings.vpl_clamp_m` not finite or negative, `settings.shadow_updates_per_frame` 0).
 ///
 /// Threading: one thread at a time per context.
 ///

@@ -4,8 +4,9 @@
 //! per fragment; [`VplSet::illuminance_lx`] is the same gather on the CPU (tests and evaluation).
 //!
 //! # What it computes
-//! - **Emission**: each luminaire's intensity I(ω) is tabulated on [`EMISSION_CELLS_Z`] ×
-//!   [`EMISSION_CELLS_PHI`] cells of equal solid angle ΔΩ (uniform in cos γ and in C). The luminaires'
+//! - **Emission**: each luminaire's intensity I(ω) is tabulated at the centres of
+//!   [`EMISSION_RINGS`] × [`EMISSION_SECTORS`] cells of 1° in γ and 1° in C (each with its exact solid
+//!   angle ΔΩ, so a beam a few degrees wide spans several rings). The luminaires'
 //!   flux estimates W_l = Σ_cells I_c ΔΩ form one distribution; photon k of N takes
 //!   u_k = (k + ½)/N through it (systematic sampling: luminaires and cells get photons in
 //!   proportion to their flux, stratified). Within its cell a photon's direction is uniform, its
@@ -39,10 +40,10 @@ use super::model::Scene;
 use super::sampling::{cosine_hemisphere, Pcg32};
 use crate::photometry::Photometry;
 
-/// Emission table cells along cos γ.
-pub const EMISSION_CELLS_Z: usize = 64;
-/// Emission table cells along C.
-pub const EMISSION_CELLS_PHI: usize = 128;
+/// Emission table rings (equal steps in the angle from the luminaire's +Z axis).
+pub const EMISSION_RINGS: usize = 180;
+/// Emission table sectors per ring (equal steps in C).
+pub const EMISSION_SECTORS: usize = 360;
 /// Most photons one set may shoot.
 pub const MAX_PHOTONS: usize = 1 << 20;
 
@@ -100,9 +101,8 @@ fn y_of(c: [f64; 3]) -> f64 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// One photometry's emission table: I at the centres of [`EMISSION_CELLS_Z`] ×
-/// [`EMISSION_CELLS_PHI`] cells of equal solid angle (luminaire frame) and their cumulative
-/// flux I_c ΔΩ. Made once per photometry and shared by its placements.
+/// One photometry's emission table: I at the centres of [`EMISSION_RINGS`] ×
+/// [`EMISSION_SECTORS`] cells (1° × 1°, luminaire frame) and their cumulative flux I_c ΔΩ_c. Made once per photometry and shared by its placements.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmissionTable {
     cdf: Vec<f64>,
@@ -110,30 +110,33 @@ pub struct EmissionTable {
     total_lm: f64,
 }
 
-const DZ: f64 = 2.0 / EMISSION_CELLS_Z as f64;
-const DPHI: f64 = std::f64::consts::TAU / EMISSION_CELLS_PHI as f64;
+const DTHETA: f64 = std::f64::consts::PI / EMISSION_RINGS as f64;
+const DPHI: f64 = std::f64::consts::TAU / EMISSION_SECTORS as f64;
+
+/// The z (cosine of the angle from +Z) at the ring edges `i` and `i + 1`, the larger first.
+fn ring_z(i: usize) -> (f64, f64) {
+    ((i as f64 * DTHETA).cos(), ((i + 1) as f64 * DTHETA).cos())
+}
 
 impl EmissionTable {
     /// The table of `p` (its absolute intensities).
     pub fn of(p: &Photometry) -> Self {
-        let d_omega = DZ * DPHI;
-        let mut cells = Vec::with_capacity(EMISSION_CELLS_Z * EMISSION_CELLS_PHI);
-        for iz in 0..EMISSION_CELLS_Z {
-            let z = -1.0 + (iz as f64 + 0.5) * DZ;
-            for ip in 0..EMISSION_CELLS_PHI {
-                let d = cell_dir(z, (ip as f64 + 0.5) * DPHI);
+        let mut cells = Vec::with_capacity(EMISSION_RINGS * EMISSION_SECTORS);
+        let mut cdf = Vec::with_capacity(EMISSION_RINGS * EMISSION_SECTORS);
+        let mut acc = 0.0;
+        for ring in 0..EMISSION_RINGS {
+            let (z0, z1) = ring_z(ring);
+            let d_omega = (z0 - z1) * DPHI;
+            let z = ((ring as f64 + 0.5) * DTHETA).cos();
+            for sector in 0..EMISSION_SECTORS {
+                let d = cell_dir(z, (sector as f64 + 0.5) * DPHI);
                 let i = p.web.sample_dir([d.x, d.y, d.z]);
-                cells.push(if i.is_finite() && i > 0.0 { i } else { 0.0 });
+                let i = if i.is_finite() && i > 0.0 { i } else { 0.0 };
+                cells.push(i);
+                acc += i * d_omega;
+                cdf.push(acc);
             }
         }
-        let mut acc = 0.0;
-        let cdf = cells
-            .iter()
-            .map(|i| {
-                acc += i * d_omega;
-                acc
-            })
-            .collect();
         EmissionTable {
             cdf,
             cells,
@@ -244,9 +247,11 @@ impl VplSet {
                 if i_c <= 0.0 {
                     return Vec::new();
                 }
-                let (iz, ip) = (c / EMISSION_CELLS_PHI, c % EMISSION_CELLS_PHI);
-                let z = -1.0 + (iz as f64 + rng.next_f64()) * DZ;
-                let phi = (ip as f64 + rng.next_f64()) * DPHI;
+                // Uniform in solid angle within the cell: z uniform between the ring's edges.
+                let (ring, sector) = (c / EMISSION_SECTORS, c % EMISSION_SECTORS);
+                let (z0, z1) = ring_z(ring);
+                let z = z1 + (z0 - z1) * rng.next_f64();
+                let phi = (sector as f64 + rng.next_f64()) * DPHI;
                 let d_local = cell_dir(z, phi);
                 let e = &emitters[l];
                 let i_here = e.intensity_local(d_local);
@@ -423,6 +428,75 @@ mod tests {
         let want = 0.5 * phi / (area * 0.5);
         let got = set.illuminance_lx(DVec3::new(0.0, 1.0, 0.0), DVec3::Y);
         assert!((got / want - 1.0).abs() < 0.15, "{got} vs {want}");
+    }
+
+    #[test]
+    fn a_narrow_beam_sends_its_whole_flux() {
+        // A 3° Gaussian spot (σ = 3°, nothing beyond 15°) into a white closed box: every photon
+        // lands, so the first bounce holds the photometry's flux (within the photons' noise).
+        let gammas: Vec<f64> = (0..=60)
+            .map(|k| f64::from(k) * 0.25)
+            .chain([20.0, 90.0, 180.0])
+            .collect();
+        let cd: Vec<String> = gammas
+            .iter()
+            .map(|g| {
+                if *g <= 15.0 {
+                    format!("{:.4}", 20000.0 * (-(g / 3.0).powi(2) / 2.0).exp())
+                } else {
+                    "0".to_string()
+                }
+            })
+            .collect();
+        let g: Vec<String> = gammas.iter().map(|g| format!("{g}")).collect();
+        let text = format!(
+            "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 {} 1 1 2 0 0 0\n1 1 10\n{}\n0\n{}\n",
+            gammas.len(),
+            g.join(" "),
+            cd.join(" ")
+        );
+        let spot = Arc::new(
+            crate::photometry::load_from_text(&text, "spot.ies", &crate::photometry::LoadOptions::default()).unwrap(),
+        );
+        let flux = spot.web.flux();
+        let scene = closed_box(1.0);
+        let bvh = Bvh::build(&scene);
+        let lum = SceneLuminaire {
+            photometry: spot,
+            scene_from_luminaire: crate::scene::placement(0.0, 2.0, 0.0, 0.0),
+        };
+        let set = VplSet::generate(
+            &scene,
+            &bvh,
+            &[lum],
+            &VplOptions {
+                photons: 4096,
+                max_bounces: 1,
+                ..VplOptions::default()
+            },
+        )
+        .unwrap();
+        assert!(
+            (set.emitted_lm / flux - 1.0).abs() < 0.01,
+            "table {} lm, web {flux} lm",
+            set.emitted_lm
+        );
+        let first = set.flux_by_bounce_lm()[0];
+        assert!((first / flux - 1.0).abs() < 0.01, "photons {first} lm, web {flux} lm");
+        // No photon carries much more than its share: the weight I(ω)/I_c varies only as much as
+        // the intensity does within a 1° cell (up to e^½ on this beam's flank at 9°; 1.86×
+        // measured).
+        let share = flux / 4096.0;
+        let heaviest = set.vpls.iter().map(|v| y_of(v.flux_rgb_lm)).fold(0.0, f64::max);
+        assert!(
+            heaviest < 2.5 * share,
+            "heaviest photon {heaviest} lm, share {share} lm"
+        );
+        // All of it lands under the spot (within 15° of the nadir at 2 m: 0.54 m).
+        assert!(set
+            .vpls
+            .iter()
+            .all(|v| v.position_m.y < 1e-9 && v.position_m.x.hypot(v.position_m.z) < 0.55));
     }
 
     #[test]

@@ -1,33 +1,36 @@
-//! The scene lighting pass (issue 20, first GPU step): a loaded [`Scene`] drawn from the host's
-//! camera and lit by every far-field luminaire instance of the renderer with direct light:
-//! absolute candela from each photometric web, inverse square, cos i, and visibility from cube
-//! shadow maps with penumbrae sized by the luminous opening. It writes L = ρ·E/π (cd/m²,
-//! Lambertian) and depth into the frame's target, before the far-field and near-field passes, so
-//! the luminaires' own appearance composites over the lit room through the one depth test.
+//! The scene lighting pass (issue 20): a loaded [`Scene`] drawn from the host's camera and lit by
+//! every far-field luminaire instance of the renderer: direct light (absolute candela from each
+//! photometric web, inverse square, cos i, visibility from cube shadow maps with penumbrae sized by
+//! the luminous opening) plus inter-reflection from virtual point lights (`scene::vpl`). It writes
+//! L = ρ·E/π (cd/m², Lambertian) and depth into the frame's target, before the far-field and
+//! near-field passes, so the luminaires' own appearance composites over the lit room through the
+//! one depth test.
 //!
 //! Promises:
 //! - [`ScenePass::set_scene`] uploads the scene once: world-space triangles, their geometric
 //!   normals (surfaces are two-sided: the side the eye sees is the side lit, as the reference's
-//!   calculation points take the normal of the receiving side) and their linear RGB reflectance,
-//!   per vertex from the material's base colour factor; a base-colour texture is replaced by its
-//!   mean (this step's one simplification of the reflectance; ρ_Y of untextured surfaces is
-//!   exactly the reference's).
+//!   calculation points take the normal of the receiving side), the material's linear RGB base
+//!   colour factor and UVs per vertex, and the base-colour textures in one sRGB atlas
+//!   ([`TextureAtlas`]) sampled per fragment as `scene::texture` samples them (for |uv| ≤ 2²⁰).
 //! - Each frame lights with every far-field instance ([`Pass::prepare`]'s instances); near-field
 //!   scans do not light the scene yet. Direct illuminance is the reference's direct estimator
 //!   (`scene::reference`) with fixed stratified points on the opening instead of random ones and
 //!   shadow-map visibility instead of shadow rays: shaders/scene/lighting.wgsl says how.
 //! - Shadow maps ([`shadows`]) are rendered inside `prepare`, in their own render pass submitted
-//!   before the frame's (queue order makes them visible to it), and kept while the scene, the
-//!   layout and every luminaire's centre stay the same.
+//!   before the frame's (queue order makes them visible to it). A luminaire's faces are rendered
+//!   again when its centre moved, at most [`SceneSettings::shadow_updates_per_frame`] luminaires a
+//!   frame (round robin); a new scene, layout or number of luminaires renders all.
+//! - Virtual point lights are made on the CPU when the scene, an instance or the photon count
+//!   changes, and gathered by every fragment.
 //! - Light culling: each luminaire has an influence radius where its light falls below
 //!   [`SceneSettings::lux_floor_lx`]; each 16-pixel screen tile lists the luminaires whose
 //!   influence sphere covers it ([`lights`]), and fragments loop over their tile's list only.
-//! - Memory: the vertex buffer (36 bytes a vertex, three per triangle) must fit the device's
+//! - Memory: the vertex buffer (48 bytes a vertex, three per triangle) must fit the device's
 //!   largest buffer; the shadow atlas stays within [`SceneSettings::shadow_budget_bytes`]; the
 //!   intensity atlas holds up to [`lights::MAX_INTENSITY_TABLES`] photometries (1 MiB each); the
-//!   tile lists and luminaire records are storage buffers; lists larger than the device's binding
-//!   limit (lavapipe: 128 MiB; every luminaire in every tile reaches it near a thousand luminaires
-//!   at 4K) are an error that names the lux floor.
+//!   tile lists, luminaire records and VPLs are storage buffers; lists larger than the device's
+//!   binding limit (lavapipe: 128 MiB; every luminaire in every tile reaches it near a thousand
+//!   luminaires at 4K) are an error that names the lux floor.
 
 pub mod lights;
 pub mod shadows;
@@ -413,8 +416,8 @@ struct IntensityAtlas {
 /// The shadow maps of the last frame and what they were rendered for.
 #[derive(Debug)]
 struct ShadowCache {
-    /// Scene generation and layout the atlas was made for.
-    key: (u64, ShadowLayout),
+    /// Scene generation, layout and number of luminaires the atlas was made for.
+    key: (u64, ShadowLayout, usize),
     view: wgpu::TextureView,
     /// Per luminaire (index in the frame's list), the centre its faces were rendered from.
     rendered: Vec<Option<[u32; 3]>>,
@@ -457,8 +460,9 @@ pub struct VplRecord {
 /// The VPLs of the last frame and what they were made for.
 #[derive(Debug)]
 struct VplCache {
-    /// Scene generation, each instance's photometry address and matrix bits, photons, clamp bits.
-    key: (u64, Vec<(usize, [u32; 16])>, u32, u32),
+    /// Scene generation, each instance's photometry address and matrix bits, photons (the clamp
+    /// is a uniform: changing it needs no new VPLs).
+    key: (u64, Vec<(usize, [u32; 16])>, u32),
     buffer: wgpu::Buffer,
     count: u32,
     /// Held, so that an address in the key is never reused for another photometry.
@@ -484,6 +488,8 @@ pub struct ScenePass {
     shadow_pipeline: wgpu::RenderPipeline,
     /// Clears a face's square to the far depth (before it is rendered again).
     clear_pipeline: wgpu::RenderPipeline,
+    /// Where the next frame's round of shadow updates starts.
+    shadow_cursor: usize,
     faces: DrawSlots,
     mesh: Option<SceneMesh>,
     settings: SceneSettings,
@@ -680,6 +686,7 @@ impl ScenePass {
                 face_layout,
                 shadow_pipeline,
                 clear_pipeline,
+                shadow_cursor: 0,
                 faces: DrawSlots::new("shadow faces", wgpu::BufferUsages::UNIFORM),
                 mesh: None,
                 settings: SceneSettings::default(),
@@ -717,6 +724,18 @@ impl ScenePass {
                     scene.triangles().len()
                 ),
             ));
+        }
+        if let Some(b) = &bvh {
+            if b.triangle_count() != scene.triangles().len() {
+                return Err(GpuError::invalid(
+                    Arg::Scene,
+                    format!(
+                        "the hierarchy given has {} triangles, the scene {}: it was built for another scene",
+                        b.triangle_count(),
+                        scene.triangles().len()
+                    ),
+                ));
+            }
         }
         let atlas = TextureAtlas::of(&scene, ctx.device.limits().max_texture_dimension_2d)?;
         let vertices = scene_vertices(&scene, &atlas);
@@ -807,7 +826,6 @@ impl ScenePass {
                 .map(|(l, m)| (Arc::as_ptr(&l.photometry) as usize, m.to_cols_array().map(f32::to_bits)))
                 .collect::<Vec<_>>(),
             settings.bounce_photons,
-            settings.vpl_clamp_m.to_bits(),
         );
         if let Some(v) = &self.vpls {
             if v.key == key {
@@ -841,8 +859,12 @@ impl ScenePass {
             clamp_m: f64::from(settings.vpl_clamp_m),
             ..VplOptions::default()
         };
-        let set = VplSet::generate_with(&scene, &bvh, &luminaires, &tables, &opts)
-            .map_err(|e| GpuError::invalid(Arg::Instance, format!("inter-reflection: {e}")))?;
+        let set = VplSet::generate_with(&scene, &bvh, &luminaires, &tables, &opts).map_err(|e| {
+            GpuError::invalid(
+                Arg::Instance,
+                format!("inter-reflection (`luminaires[i]` is the i-th far-field instance in creation order): {e}"),
+            )
+        })?;
         let records: Vec<VplRecord> = set
             .vpls
             .iter()
@@ -1013,13 +1035,19 @@ impl ScenePass {
             .iter()
             .map(|r| [r.centre[0].to_bits(), r.centre[1].to_bits(), r.centre[2].to_bits()])
             .collect();
-        let key = (mesh.generation, layout);
+        // A new number of luminaires renders all: luminaires are slots by their place in the
+        // list, which shifts when one is added or removed.
+        let key = (mesh.generation, layout, records.len());
         let fresh = !self.shadows.as_ref().is_some_and(|s| s.key == key);
         let rendered: Vec<Option<[u32; 3]>> = match &self.shadows {
             Some(s) if !fresh => s.rendered.clone(),
             _ => Vec::new(),
         };
-        let stale: Vec<usize> = (0..records.len())
+        // Round robin from where the last frame stopped, so that none waits forever.
+        let n = records.len();
+        let cursor = self.shadow_cursor % n.max(1);
+        let stale: Vec<usize> = (0..n)
+            .map(|k| (cursor + k) % n)
             .filter(|&i| rendered.get(i).copied().flatten() != Some(centres[i]))
             .collect();
         let budget = if fresh {
@@ -1028,6 +1056,9 @@ impl ScenePass {
             self.settings.shadow_updates_per_frame as usize
         };
         let now: Vec<usize> = stale.iter().copied().take(budget).collect();
+        if let Some(&last) = now.last() {
+            self.shadow_cursor = (last + 1) % n.max(1);
+        }
         self.stats.shadows_pending = stale.len() - now.len();
         if now.is_empty() {
             return Ok(());
@@ -1186,6 +1217,7 @@ impl Pass for ScenePass {
             })
             .collect();
         let shadows_on = settings.shadows && !records.is_empty();
+        self.stats.shadows_pending = 0;
         let layout = if shadows_on {
             let max_side = ctx.device.limits().max_texture_dimension_2d;
             let layout = ShadowLayout::new(
