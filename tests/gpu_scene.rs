@@ -101,6 +101,42 @@ fn probe(scene: &Scene, bvh: &Bvh, cam: &HostCamera, w: u32, h: u32, i: u32, j: 
     })
 }
 
+/// Probe pixels on a grid (`border` px in from the edges, every `step` px), kept where the pixel
+/// and its four neighbours see one flat surface and no luminaire's opening (the far-field pass
+/// draws it there, over the lit room).
+fn clear_probes(
+    scene: &Scene,
+    bvh: &Bvh,
+    cam: &HostCamera,
+    (w, h): (u32, u32),
+    mats: &[DMat4],
+    border: u32,
+    step: usize,
+) -> Vec<Probe> {
+    let mut probes = Vec::new();
+    for j in (border..h - border).step_by(step) {
+        for i in (border..w - border).step_by(step) {
+            let Some(p) = probe(scene, bvh, cam, w, h, i, j) else {
+                continue;
+            };
+            let (o, d) = pixel_ray(cam, w, h, i, j);
+            if mats.iter().any(|m| hits_opening(m, o, d, 0.05)) {
+                continue;
+            }
+            let same = [(i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)].iter().all(|&(a, b)| {
+                probe(scene, bvh, cam, w, h, a, b).is_some_and(|q| {
+                    q.point.normal.dot(p.point.normal) > 0.9999
+                        && (q.point.position_m - p.point.position_m).dot(p.point.normal).abs() < 1e-3
+                })
+            });
+            if same {
+                probes.push(p);
+            }
+        }
+    }
+    probes
+}
+
 /// Renders `scene` lit by `lights` (photometry, placement matrix) and returns the luminance
 /// (cd/m², Y of the linear RGB) per pixel, row 0 at the top.
 fn render_luminance(
@@ -614,29 +650,7 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
         w as f32 / hgt as f32,
     );
     let lum = render_luminance(&mut r, &scene, &lights, &cam, w, hgt);
-    // Probe pixels on a grid, kept where the pixel and its four neighbours see one flat surface
-    // and no luminaire's opening (the far-field pass draws it there, over the lit room).
-    let mut probes = Vec::new();
-    for j in (3..hgt - 3).step_by(5) {
-        for i in (3..w - 3).step_by(5) {
-            let Some(p) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
-                continue;
-            };
-            let (o, d) = pixel_ray(&cam, w, hgt, i, j);
-            if mats.iter().any(|m| hits_opening(m, o, d, 0.05)) {
-                continue;
-            }
-            let same = [(i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)].iter().all(|&(a, b)| {
-                probe(&scene, &bvh, &cam, w, hgt, a, b).is_some_and(|q| {
-                    q.point.normal.dot(p.point.normal) > 0.9999
-                        && (q.point.position_m - p.point.position_m).dot(p.point.normal).abs() < 1e-3
-                })
-            });
-            if same {
-                probes.push(p);
-            }
-        }
-    }
+    let probes = clear_probes(&scene, &bvh, &cam, (w, hgt), &mats, 3, 5);
     let tracer = Tracer::new(
         &scene,
         &lights
@@ -773,27 +787,7 @@ fn office_with_bounce(r: &mut Renderer, lights: &[(Arc<Photometry>, DMat4)]) -> 
     );
     let lum = render_luminance(r, &scene, lights, &cam, w, hgt);
     let mats: Vec<DMat4> = lights.iter().map(|l| l.1).collect();
-    let mut probes = Vec::new();
-    for j in (2..hgt - 2).step_by(3) {
-        for i in (2..w - 2).step_by(3) {
-            let Some(p) = probe(&scene, &bvh, &cam, w, hgt, i, j) else {
-                continue;
-            };
-            let (o, d) = pixel_ray(&cam, w, hgt, i, j);
-            if mats.iter().any(|m| hits_opening(m, o, d, 0.05)) {
-                continue;
-            }
-            let same = [(i - 1, j), (i + 1, j), (i, j - 1), (i, j + 1)].iter().all(|&(a, b)| {
-                probe(&scene, &bvh, &cam, w, hgt, a, b).is_some_and(|q| {
-                    q.point.normal.dot(p.point.normal) > 0.9999
-                        && (q.point.position_m - p.point.position_m).dot(p.point.normal).abs() < 1e-3
-                })
-            });
-            if same {
-                probes.push(p);
-            }
-        }
-    }
+    let probes = clear_probes(&scene, &bvh, &cam, (w, hgt), &mats, 2, 3);
     let lums: Vec<SceneLuminaire> = lights
         .iter()
         .map(|(p, m)| SceneLuminaire {

@@ -99,7 +99,8 @@ fn parse_from(s: &str) -> Result<(f64, f64, f64), String> {
     }
 }
 
-fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
+/// `--camera EX,EY,EZ[,TX,TY,TZ]` (metres): the eye and, if given, the point it looks at.
+pub(super) fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
     let v: Vec<f32> = s
         .split(',')
         .map(|t| t.trim().parse::<f32>())

@@ -24,7 +24,7 @@ use lumiview::scene::plot::{fmt_lx, GridPlot, GridStats};
 use lumiview::scene::{Scene, SceneLuminaire, TraceOptions, Tracer};
 use lumiview::source::{self, SourceKind};
 
-use super::render::{look_at, luminance_legend, percentile_luminance, perspective};
+use super::render::{look_at, luminance_legend, parse_camera, percentile_luminance, perspective};
 use super::CliResult;
 use crate::LoadArgs;
 
@@ -366,22 +366,6 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> CliResult {
         .map_err(|e| cannot(&e))?;
     tmp.commit().map_err(|e| cannot(&e))?;
     Ok(())
-}
-
-fn parse_camera(s: &str) -> Result<(Vec3, Option<Vec3>), String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("--camera '{s}': expected EX,EY,EZ or EX,EY,EZ,TX,TY,TZ in metres"))?;
-    if v.iter().any(|x| !x.is_finite()) {
-        return Err(format!("--camera '{s}': values must be finite"));
-    }
-    match v[..] {
-        [x, y, z] => Ok((Vec3::new(x, y, z), None)),
-        [x, y, z, a, b, c] => Ok((Vec3::new(x, y, z), Some(Vec3::new(a, b, c)))),
-        _ => Err(format!("--camera '{s}': expected 3 or 6 numbers")),
-    }
 }
 
 fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
