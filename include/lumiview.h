@@ -747,7 +747,8 @@ struct lumi_render_options lumi_render_options_default(void);
 // Errors: `LUMI_STATUS_NULL_POINTER` (`camera`), `LUMI_STATUS_INVALID_ARGUMENT` (a NaN, infinite
 // or singular matrix, an unknown enum value or overlay bit, an exposure or solid radius not > 0,
 // an output the target's format cannot hold, a stale handle, a near-field view needing more than
-// the luminaire's budget), `LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`,
+// the luminaire's budget, with a scene's inter-reflection on an `instance` not placed by a rotation
+// and a translation), `LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`,
 // `LUMI_STATUS_OUT_OF_MEMORY`; per case: docs/ffi-conventions.md, "Statuses by function".
 //
 // # Safety

@@ -144,6 +144,35 @@ fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
     })
 }
 
+/// With a scene drawn and its inter-reflection on, every far-field instance must be placed by a
+/// rotation and a translation (photons are traced from it): the first that is not is
+/// `INVALID_ARGUMENT` naming `instance` and its handle.
+fn rigid_for_photons(renderer: &crate::gpu::Renderer, tag: u64) -> Result<(), FfiError> {
+    if !renderer.has_scene() || !renderer.scene_settings().indirect {
+        return Ok(());
+    }
+    for (id, lum, model) in renderer.instances() {
+        let Ok(crate::gpu::renderer::Luminaire::Farfield(f)) = renderer.luminaire(lum) else {
+            continue;
+        };
+        let placed = crate::scene::SceneLuminaire {
+            photometry: f.photometry.clone(),
+            scene_from_luminaire: model.as_dmat4(),
+        };
+        if let Err(why) = placed.check_placement() {
+            let handle = super::handle::encode(tag, super::handle::Kind::Instance, id.0);
+            return Err(FfiError::invalid(
+                "instance",
+                format!(
+                    "{handle:#x}: {why} (the scene's inter-reflection traces photons from it; set \
+                     lumi_scene_settings.indirect = false to draw it)"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Renders every instance of the context into `target`, seen by `camera`.
 ///
 /// Synchronisation (docs/interop.md): the call returns after the GPU finished; the exported images
@@ -158,7 +187,8 @@ fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
 /// Errors: `LUMI_STATUS_NULL_POINTER` (`camera`), `LUMI_STATUS_INVALID_ARGUMENT` (a NaN, infinite
 /// or singular matrix, an unknown enum value or overlay bit, an exposure or solid radius not > 0,
 /// an output the target's format cannot hold, a stale handle, a near-field view needing more than
-/// the luminaire's budget), `LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`,
+/// the luminaire's budget, with a scene's inter-reflection on an `instance` not placed by a rotation
+/// and a translation), `LUMI_STATUS_GPU`, `LUMI_STATUS_DEVICE_LOST`,
 /// `LUMI_STATUS_OUT_OF_MEMORY`; per case: docs/ffi-conventions.md, "Statuses by function".
 ///
 /// # Safety
@@ -184,6 +214,7 @@ pub unsafe extern "C" fn lumi_render(
             let ContextInner {
                 renderer, targets, tag, ..
             } = c;
+            rigid_for_photons(renderer, *tag)?;
             let t = target_in(*tag, targets, target)?;
             renderer.render(t, &cam, &o).map_err(render_error)
         })

@@ -245,6 +245,16 @@ impl Renderer {
         self.scene.set_scene(&self.ctx, scene, bvh)
     }
 
+    /// How the scene is lit (the settings last set).
+    pub fn scene_settings(&self) -> SceneSettings {
+        self.scene.settings()
+    }
+
+    /// Whether a scene is set.
+    pub fn has_scene(&self) -> bool {
+        self.scene.has_scene()
+    }
+
     /// What the scene pass used for its last frame: luminaires, virtual point lights, shadow
     /// face size, and how often shadows and VPLs were made.
     pub fn scene_stats(&self) -> crate::gpu::scene::SceneStats {

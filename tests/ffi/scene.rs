@@ -749,6 +749,37 @@ fn the_scene_set_on_the_context_is_drawn_lit() {
             "{e_total_pixel} vs {}",
             total[0]
         );
+        // A scaled instance cannot send photons: with inter-reflection on, lumi_render names it by
+        // its handle; with it off, the instance is drawn.
+        let mut scaled = model();
+        for v in scaled.iter_mut().take(12) {
+            *v *= 2.0;
+        }
+        let mut big: lumi_instance = 0;
+        assert_eq!(
+            lumi_instance_create(ctx, lum, scaled.as_ptr(), &mut big),
+            LUMI_STATUS_OK
+        );
+        assert_eq!(
+            lumi_render(ctx, target, &cam, ptr::null()),
+            LUMI_STATUS_INVALID_ARGUMENT
+        );
+        let err = last_error();
+        assert!(
+            err.contains("'instance'") && err.contains(&format!("{big:#x}")) && err.contains("scales or shears"),
+            "{err}"
+        );
+        set.indirect = false;
+        assert_eq!(lumi_context_set_scene_settings(ctx, &set), LUMI_STATUS_OK);
+        assert_eq!(
+            lumi_render(ctx, target, &cam, ptr::null()),
+            LUMI_STATUS_OK,
+            "{}",
+            last_error()
+        );
+        assert_eq!(lumi_instance_destroy(ctx, big), LUMI_STATUS_OK);
+        set.indirect = true;
+        assert_eq!(lumi_context_set_scene_settings(ctx, &set), LUMI_STATUS_OK);
 
         // Destroying the drawn scene stops drawing it; so does setting 0.
         let mut other: lumi_scene = 0;
