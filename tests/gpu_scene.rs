@@ -13,10 +13,9 @@ mod scene_common;
 
 mod gpu_common;
 
-use std::path::Path;
 use std::sync::Arc;
 
-use scene_common::{floor, photometry_text, scene_of};
+use scene_common::{floor, office, photometry_text, scene_of};
 
 use glam::{DMat4, DVec3, Vec3};
 use gpu_common::GPU_LOCK;
@@ -636,8 +635,7 @@ fn seen_shares(bvh: &Bvh, x: DVec3, n: DVec3, lights: &[DMat4]) -> Vec<f64> {
 fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let Some(mut r) = renderer() else { return };
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
-    let scene = lumiview::scene::load(&glb).unwrap();
+    let scene = office();
     let bvh = Bvh::build(&scene);
     let linear = photometry_text(LINEAR_IES, "linear.ies");
     let mats: Vec<DMat4> = OFFICE_LUMINAIRES.iter().map(|p| p.matrix()).collect();
@@ -773,8 +771,7 @@ fn the_office_under_its_documented_layout_matches_the_references_direct_term() {
 /// the reference path tracer's total (the method, visibility of the bounce left out). Returns the
 /// relative errors (implementation, method) per probe.
 fn office_with_bounce(r: &mut Renderer, lights: &[(Arc<Photometry>, DMat4)]) -> (Vec<f64>, Vec<f64>) {
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
-    let scene = lumiview::scene::load(&glb).unwrap();
+    let scene = office();
     let bvh = Bvh::build(&scene);
     let settings = SceneSettings::default();
     r.set_scene_settings(settings).unwrap();
@@ -876,8 +873,7 @@ fn moved_luminaires_update_their_shadows_within_the_per_frame_budget() {
         ..SceneSettings::default()
     };
     r.set_scene_settings(settings).unwrap();
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
-    let scene = lumiview::scene::load(&glb).unwrap();
+    let scene = office();
     let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
     let (w, hgt) = (64u32, 48u32);
     let cam = perspective(
@@ -966,8 +962,7 @@ fn textured_surfaces_reflect_their_texels() {
     // the CPU's texture sampling at the pixel ray's hit and E the exact direct term.
     let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let Some(mut r) = renderer() else { return };
-    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb");
-    let scene = lumiview::scene::load(&glb).unwrap();
+    let scene = office();
     let bvh = Bvh::build(&scene);
     let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
     let lights = vec![(p.clone(), placement(0.0, 2.8, -1.0, 0.0))];

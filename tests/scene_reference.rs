@@ -14,7 +14,7 @@ use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use scene_common::{floor, photometry_text, scene_of};
+use scene_common::{floor, office, photometry_text, scene_of};
 
 use glam::DVec3;
 use lumiview::draw::glb::{Buffer, ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER};
@@ -262,7 +262,7 @@ fn an_occluder_casts_an_exact_shadow_and_nothing_else() {
 /// refused, and so is a matrix that scales.
 #[test]
 fn a_prebuilt_hierarchy_traces_like_a_fresh_one() {
-    let scene = lumiview::scene::load(&repo(OFFICE_GLB)).unwrap();
+    let scene = office();
     let bvh = Arc::new(lumiview::scene::bvh::Bvh::build(&scene));
     let p = photometry_text(LINEAR_IES, "linear.ies");
     let points: Vec<SurfacePoint> = [(0.0, 0.0), (0.5, 1.2), (-2.5, 1.5)]
@@ -671,7 +671,7 @@ fn the_office_work_plane_under_its_documented_layout() {
     // seen or not), a plane at 0.3 m (under the desks and chairs) inside a 0.5 m border. Direct
     // light at every grid point: the sum of I cos³γ / h² (written here) over the luminaires it
     // sees — some subset of the six, all of them where nothing stands between.
-    let scene = lumiview::scene::load(&repo(OFFICE_GLB)).unwrap();
+    let scene = office();
     let p = photometry_text(ASYMMETRIC_IES, "asymmetric.ies");
     let lums: Vec<SceneLuminaire> = sample::OFFICE_LUMINAIRES
         .iter()
@@ -1016,7 +1016,7 @@ fn the_vpl_bounce_matches_the_path_tracer_on_the_work_plane() {
     // tests/gpu_scene.rs checks the GPU gathers these VPLs as this CPU mirror does.
     use lumiview::scene::bvh::Bvh;
     use lumiview::scene::vpl::{VplOptions, VplSet};
-    let scene = lumiview::scene::load(Path::new(OFFICE_GLB)).unwrap();
+    let scene = office();
     let bvh = Bvh::build(&scene);
     let rect = FloorRect::of_bounds(&scene.bounds(), 0.5).unwrap();
     let points = work_plane_grid(&rect, 0.75, 0.25).unwrap();

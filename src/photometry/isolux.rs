@@ -187,7 +187,7 @@ fn round_up(v: f64) -> f64 {
 
 /// `mantissa × 10^exponent`, dividing for negative exponents so that 1.5 × 10⁻¹ is the double
 /// nearest 0.15 (as the literal is), not 0.15000000000000002.
-fn decimal(mantissa: f64, exponent: i32) -> f64 {
+pub(crate) fn decimal(mantissa: f64, exponent: i32) -> f64 {
     if exponent >= 0 {
         mantissa * 10f64.powi(exponent)
     } else {
@@ -397,7 +397,7 @@ fn fmt_coordinate(v: f64) -> String {
 }
 
 /// `v` with `digits` significant digits in plain decimal notation, trailing zeros dropped.
-fn fmt_significant(v: f64, digits: i32) -> String {
+pub(crate) fn fmt_significant(v: f64, digits: i32) -> String {
     if v == 0.0 || !v.is_finite() {
         return if v.is_finite() { "0".to_string() } else { format!("{v}") };
     }

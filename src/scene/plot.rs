@@ -24,6 +24,7 @@ use crate::draw::colormap::YELLOW_ORANGE_BROWN;
 use crate::draw::text::{Anchor, Typeface};
 use crate::draw::ticks::{label_at_step, step_for_span};
 use crate::photometry::contour::contour_lines;
+use crate::photometry::isolux::{decimal, fmt_significant};
 
 /// Most isolux levels drawn.
 pub const MAX_LEVELS: usize = 9;
@@ -100,8 +101,7 @@ pub fn grid_levels(min_lx: f64, max_lx: f64) -> Vec<f64> {
     let mut e = lo.log10().floor() as i32 - 1;
     while 10f64.powi(e) < max_lx {
         for m in [1.0, 1.5, 2.0, 3.0, 5.0, 7.5] {
-            // Decimal values written exactly (0.3, not 0.30000000000000004).
-            let v: f64 = format!("{m}e{e}").parse().unwrap_or(m * 10f64.powi(e));
+            let v = decimal(m, e);
             if v > lo && v < max_lx {
                 levels.push(v);
             }
@@ -158,16 +158,7 @@ fn rect(x: f64, y: f64, w: f64, h: f64) -> Option<Rect> {
 
 /// A value in lx as written on lines and the bar (3 significant digits, no trailing zeros).
 pub fn fmt_lx(v: f64) -> String {
-    if v == 0.0 {
-        return "0".to_string();
-    }
-    let decimals = (2 - v.abs().log10().floor() as i32).clamp(0, 6) as usize;
-    let s = format!("{v:.decimals$}");
-    if s.contains('.') {
-        s.trim_end_matches('0').trim_end_matches('.').to_string()
-    } else {
-        s
-    }
+    fmt_significant(v, 3)
 }
 
 impl GridPlot<'_> {

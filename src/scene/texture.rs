@@ -65,6 +65,18 @@ pub struct TextureRef {
     pub filter: Filter,
 }
 
+/// sRGB transfer function, linear value → 8-bit code (IEC 61966-2-1), the value clamped to 0…1
+/// first (NaN gives 0).
+pub fn linear_to_srgb8(c: f64) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0).round() as u8
+}
+
 /// sRGB transfer function, 8-bit code → linear value in 0…1 (IEC 61966-2-1).
 pub fn srgb_to_linear(code: u8) -> f64 {
     let c = f64::from(code) / 255.0;
@@ -255,6 +267,12 @@ mod tests {
         // 0.5 in sRGB is 0.2140 linear; the linear segment below 0.04045.
         assert!((srgb_to_linear(128) - 0.215_860_5).abs() < 1e-6);
         assert!((srgb_to_linear(10) - 10.0 / 255.0 / 12.92).abs() < 1e-15);
+        // The encoder inverts the decoder for every code; out of range and NaN clamp.
+        assert!((0..=255u8).all(|c| linear_to_srgb8(srgb_to_linear(c)) == c));
+        assert_eq!(
+            (linear_to_srgb8(-1.0), linear_to_srgb8(2.0), linear_to_srgb8(f64::NAN)),
+            (0, 255, 0)
+        );
     }
 
     #[test]

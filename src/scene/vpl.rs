@@ -36,7 +36,7 @@ use rayon::prelude::*;
 use super::bvh::{offset_m, Bvh};
 use super::emitter::{Emitter, SceneLuminaire};
 use super::error::{Result, SceneError};
-use super::model::Scene;
+use super::model::{luminance_y, Scene};
 use super::sampling::{cosine_hemisphere, Pcg32};
 use crate::photometry::Photometry;
 
@@ -94,11 +94,6 @@ pub struct VplSet {
     /// The luminaires' flux as the emission tables give it, lm (what the photons carry in
     /// expectation).
     pub emitted_lm: f64,
-}
-
-/// Luminance-weighted Y of an RGB triple (Rec. 709).
-fn y_of(c: [f64; 3]) -> f64 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// One photometry's emission table: I at the centres of [`EMISSION_RINGS`] ×
@@ -292,7 +287,7 @@ impl VplSet {
     /// The indirect illuminance (lx) at `x` with unit normal `n`: Y of
     /// [`VplSet::illuminance_rgb_lx`].
     pub fn illuminance_lx(&self, x: DVec3, n: DVec3) -> f64 {
-        y_of(self.illuminance_rgb_lx(x, n))
+        luminance_y(self.illuminance_rgb_lx(x, n))
     }
 
     /// Flux of the VPLs of each bounce, lm (index 0: first bounce).
@@ -303,7 +298,7 @@ impl VplSet {
             if out.len() < b {
                 out.resize(b, 0.0);
             }
-            out[b - 1] += y_of(v.flux_rgb_lm);
+            out[b - 1] += luminance_y(v.flux_rgb_lm);
         }
         out
     }
@@ -342,7 +337,7 @@ fn trace(
         }
         let rho = scene.reflectance_rgb(hit.triangle, hit.b1, hit.b2);
         let reflected = [carried[0] * rho[0], carried[1] * rho[1], carried[2] * rho[2]];
-        if y_of(reflected) <= 0.0 {
+        if luminance_y(reflected) <= 0.0 {
             break;
         }
         out.push(Vpl {
@@ -351,7 +346,7 @@ fn trace(
             flux_rgb_lm: reflected,
             bounce: bounce as u32,
         });
-        let q = y_of(rho).clamp(0.05, 0.95);
+        let q = luminance_y(rho).clamp(0.05, 0.95);
         if rng.next_f64() >= q {
             break;
         }
@@ -487,7 +482,7 @@ mod tests {
         // the intensity does within a 1° cell (up to e^½ on this beam's flank at 9°; 1.86×
         // measured).
         let share = flux / 4096.0;
-        let heaviest = set.vpls.iter().map(|v| y_of(v.flux_rgb_lm)).fold(0.0, f64::max);
+        let heaviest = set.vpls.iter().map(|v| luminance_y(v.flux_rgb_lm)).fold(0.0, f64::max);
         assert!(
             heaviest < 2.5 * share,
             "heaviest photon {heaviest} lm, share {share} lm"

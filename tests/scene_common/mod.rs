@@ -1,5 +1,5 @@
 //! Helpers shared by the scene tests (tests/scene_reference.rs on the CPU, tests/gpu_scene.rs on the
-//! GPU): a photometry from text, a scene of grey parts, the floor. CPU only.
+//! GPU): a photometry from text, a scene of grey parts, the sample office, the floor. CPU only.
 
 use std::sync::Arc;
 
@@ -21,6 +21,11 @@ pub fn scene_of(parts: Vec<(Vec<[DVec3; 3]>, f64)>) -> Scene {
         p.materials.push(Material::grey(rho));
     }
     Scene::new(p).unwrap()
+}
+
+/// The shipped sample office (`assets/scenes/office.glb`).
+pub fn office() -> Scene {
+    lumiview::scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/office.glb")).unwrap()
 }
 
 /// The floor y = 0 over ±`half` m, facing up.

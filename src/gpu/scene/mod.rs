@@ -231,15 +231,7 @@ fn reduced_rgba(img: &crate::scene::texture::Image, k: u32) -> (u32, u32, Vec<u8
         wrap_t: crate::scene::texture::Wrap::ClampToEdge,
         filter: crate::scene::texture::Filter::Nearest,
     };
-    let encode = |c: f64| {
-        let c = c.clamp(0.0, 1.0);
-        let s = if c <= 0.003_130_8 {
-            12.92 * c
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round() as u8
-    };
+    let encode = crate::scene::texture::linear_to_srgb8;
     let mut out = Vec::with_capacity((w * h * 4) as usize);
     for j in 0..h {
         for i in 0..w {
@@ -557,6 +549,44 @@ fn texture(ctx: &GpuContext, label: &str, w: u32, h: u32, format: wgpu::TextureF
     })
 }
 
+/// A pipeline that writes only Depth32Float (the shadow atlas): `entry` of `module`, no culling,
+/// depth written where `compare` passes.
+fn depth_only_pipeline(
+    ctx: &GpuContext,
+    label: &str,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+    compare: wgpu::CompareFunction,
+) -> wgpu::RenderPipeline {
+    ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            buffers,
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(compare),
+            stencil: wgpu::StencilState::default(),
+            bias: wgpu::DepthBiasState::default(),
+        }),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: None,
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 fn storage_buffer(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -627,53 +657,26 @@ impl ScenePass {
                 bind_group_layouts: &[Some(&face_layout)],
                 immediate_size: 0,
             });
-            let shadow_pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("scene shadow faces"),
-                layout: Some(&shadow_layout),
-                vertex: wgpu::VertexState {
-                    module: &shadow_module,
-                    entry_point: Some("vs_shadow"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(SHADOW_VERTEX_LAYOUT)],
-                },
-                primitive: wgpu::PrimitiveState {
-                    cull_mode: None,
-                    ..Default::default()
-                },
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: wgpu::TextureFormat::Depth32Float,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Greater),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            });
-            let clear_pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("scene shadow face clear"),
-                layout: Some(&shadow_layout),
-                vertex: wgpu::VertexState {
-                    module: &shadow_module,
-                    entry_point: Some("vs_clear"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: wgpu::PrimitiveState::default(),
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: wgpu::TextureFormat::Depth32Float,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: wgpu::StencilState::default(),
-                    bias: wgpu::DepthBiasState::default(),
-                }),
-                multisample: wgpu::MultisampleState::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            });
+            // Faces: the scene's depth, nearest kept (reversed depth). Clear: a face's square reset
+            // to the far depth 0 whatever it held.
+            let shadow_pipeline = depth_only_pipeline(
+                ctx,
+                "scene shadow faces",
+                &shadow_layout,
+                &shadow_module,
+                "vs_shadow",
+                &[Some(SHADOW_VERTEX_LAYOUT)],
+                wgpu::CompareFunction::Greater,
+            );
+            let clear_pipeline = depth_only_pipeline(
+                ctx,
+                "scene shadow face clear",
+                &shadow_layout,
+                &shadow_module,
+                "vs_clear",
+                &[],
+                wgpu::CompareFunction::Always,
+            );
             let placeholder_depth = texture(ctx, "no shadow maps", 1, 1, wgpu::TextureFormat::Depth32Float)
                 .create_view(&wgpu::TextureViewDescriptor::default());
             let placeholder_table = texture(ctx, "no intensity tables", 1, 1, wgpu::TextureFormat::R32Float)

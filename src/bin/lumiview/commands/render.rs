@@ -452,46 +452,19 @@ pub fn render(a: &RenderArgs) -> CliResult {
     ro.exposure = exposure;
     r.render(&mut t, &cam, &ro)?;
     let px = t.read(&r.ctx, Attachment::Color)?;
-    // Written under a temporary name and renamed: a failed or interrupted render keeps the
-    // previous still.
-    let cannot = |e: &dyn std::fmt::Display| format!("{}: {e}", a.output.display());
-    let (mut tmp, _) = lumiview::files::TempOutput::create(&a.output).map_err(|e| cannot(&e))?;
-    if exr {
-        let f: Vec<f32> = px
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        exr::prelude::write_rgba_file(tmp.path(), w as usize, h as usize, |x, y| {
-            let i = (y * w as usize + x) * 4;
-            (f[i], f[i + 1], f[i + 2], f[i + 3])
-        })
-        .map_err(|e| cannot(&e))?;
-    } else {
-        let mut px = px;
-        if !a.transparent {
-            // The colour is premultiplied by coverage: over black it stays as it is.
-            for p in px.chunks_exact_mut(4) {
-                p[3] = 255;
-            }
-        }
-        let (px, h_out) = if a.legend {
-            let legend = luminance_legend(w, exposure, a.transparent)?;
-            let lh = legend.len() as u32 / (4 * w);
-            ([px, legend].concat(), h + lh)
+    write_still(
+        &a.output,
+        px,
+        (w, h),
+        if exr {
+            Still::Exr
         } else {
-            (px, h)
-        };
-        let file = tmp
-            .take_file()
-            .ok_or_else(|| cannot(&"the temporary file is not open"))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h_out);
-        enc.set_color(png::ColorType::Rgba);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header().map_err(|e| cannot(&e))?;
-        wr.write_image_data(&px).map_err(|e| cannot(&e))?;
-        wr.finish().map_err(|e| cannot(&e))?;
-    }
-    tmp.commit().map_err(|e| cannot(&e))?;
+            Still::Png {
+                transparent: a.transparent,
+                legend_exposure: a.legend.then_some(exposure),
+            }
+        },
+    )?;
     println!(
         "{}: {w}×{h}, eye ({:.3}, {:.3}, {:.3}) m looking at ({:.3}, {:.3}, {:.3}) m, fov {fov}°; {}; {}; {} ({})",
         a.output.display(),
@@ -519,25 +492,77 @@ pub fn render(a: &RenderArgs) -> CliResult {
     Ok(())
 }
 
+/// What a still is written as.
+pub(super) enum Still {
+    /// OpenEXR of the RGBA32F target (luminance in cd/m², alpha = coverage).
+    Exr,
+    /// PNG of the RGBA8 sRGB target: opaque on black unless `transparent`; with a luminance scale
+    /// bar below at `legend_exposure` (m²/cd).
+    Png {
+        transparent: bool,
+        legend_exposure: Option<f32>,
+    },
+}
+
+/// Writes the target's pixels `px` (`w` × `h`, rows from the top) to `path` as `kind`, under a
+/// temporary name renamed into place: a failed or interrupted render keeps the previous still.
+pub(super) fn write_still(path: &std::path::Path, px: Vec<u8>, (w, h): (u32, u32), kind: Still) -> CliResult {
+    let cannot = |e: &dyn std::fmt::Display| format!("{}: {e}", path.display());
+    let (mut tmp, _) = lumiview::files::TempOutput::create(path).map_err(|e| cannot(&e))?;
+    match kind {
+        Still::Exr => {
+            let f: Vec<f32> = px
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect();
+            exr::prelude::write_rgba_file(tmp.path(), w as usize, h as usize, |x, y| {
+                let i = (y * w as usize + x) * 4;
+                (f[i], f[i + 1], f[i + 2], f[i + 3])
+            })
+            .map_err(|e| cannot(&e))?;
+        }
+        Still::Png {
+            transparent,
+            legend_exposure,
+        } => {
+            let mut px = px;
+            if !transparent {
+                // The colour is premultiplied by coverage: over black it stays as it is.
+                for p in px.chunks_exact_mut(4) {
+                    p[3] = 255;
+                }
+            }
+            let (px, h_out) = match legend_exposure {
+                Some(exposure) => {
+                    let legend = luminance_legend(w, exposure, transparent)?;
+                    let lh = legend.len() as u32 / (4 * w);
+                    ([px, legend].concat(), h + lh)
+                }
+                None => (px, h),
+            };
+            let file = tmp
+                .take_file()
+                .ok_or_else(|| cannot(&"the temporary file is not open"))?;
+            let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w, h_out);
+            enc.set_color(png::ColorType::Rgba);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut wr = enc.write_header().map_err(|e| cannot(&e))?;
+            wr.write_image_data(&px).map_err(|e| cannot(&e))?;
+            wr.finish().map_err(|e| cannot(&e))?;
+        }
+    }
+    tmp.commit().map_err(|e| cannot(&e))?;
+    Ok(())
+}
+
 /// The scale bar under a `--legend` still: luminance in cd/m² from where the tone map leaves
 /// black (display 2 %) to where it saturates (98 %), in the still's own colours, as RGBA rows
 /// `width` wide.
-pub(super) fn luminance_legend(
-    width: u32,
-    exposure: f32,
-    transparent: bool,
-) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
+fn luminance_legend(width: u32, exposure: f32, transparent: bool) -> Result<Vec<u8>, Box<dyn std::error::Error>> {
     use lumiview::gpu::farfield::tone_map;
     use lumiview::photometry::plot::legend::ScaleBar;
     let e = f64::from(exposure);
-    let srgb8 = |v: f64| {
-        let s = if v <= 0.003_130_8 {
-            12.92 * v
-        } else {
-            1.055 * v.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0).round().clamp(0.0, 255.0) as u8
-    };
+    let srgb8 = lumiview::scene::texture::linear_to_srgb8;
     let colour = |l: f64| {
         let g = srgb8(tone_map(l, e));
         [g, g, g]

@@ -24,7 +24,7 @@ use lumiview::scene::plot::{fmt_lx, GridPlot, GridStats};
 use lumiview::scene::{Scene, SceneLuminaire, TraceOptions, Tracer};
 use lumiview::source::{self, SourceKind};
 
-use super::render::{look_at, luminance_legend, parse_camera, percentile_luminance, perspective};
+use super::render::{look_at, parse_camera, percentile_luminance, perspective, write_still, Still};
 use super::CliResult;
 use crate::LoadArgs;
 
@@ -352,8 +352,7 @@ fn grid(args: &SceneArgs, scene: &Scene, placed: &[Placed], height_m: f64) -> Cl
 
 /// A number of metres as written (0.75, not 0.75000000001).
 fn trim(v: f64) -> String {
-    let s = format!("{:.4}", if v.abs() < 5e-5 { 0.0 } else { v });
-    s.trim_end_matches('0').trim_end_matches('.').to_string()
+    lumiview::draw::ticks::trim_number(format!("{v:.4}"))
 }
 
 fn write_atomic(path: &Path, bytes: &[u8]) -> CliResult {
@@ -487,42 +486,19 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
     };
     r.render(&mut t, &cam, &ro)?;
     let px = t.read(&r.ctx, Attachment::Color)?;
-    let cannot = |e: &dyn std::fmt::Display| format!("{}: {e}", args.output.display());
-    if exr {
-        let f: Vec<f32> = px
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        let (tmp, _) = lumiview::files::TempOutput::create(&args.output).map_err(|e| cannot(&e))?;
-        exr::prelude::write_rgba_file(tmp.path(), w as usize, h as usize, |x, y| {
-            let i = (y * w as usize + x) * 4;
-            (f[i], f[i + 1], f[i + 2], f[i + 3])
-        })
-        .map_err(|e| cannot(&e))?;
-        tmp.commit().map_err(|e| cannot(&e))?;
-    } else {
-        let mut px = px;
-        for p in px.chunks_exact_mut(4) {
-            p[3] = 255;
-        }
-        let (px, h_out) = if args.legend {
-            let legend = luminance_legend(w, exposure, false)?;
-            let lh = legend.len() as u32 / (4 * w);
-            ([px, legend].concat(), h + lh)
+    write_still(
+        &args.output,
+        px,
+        (w, h),
+        if exr {
+            Still::Exr
         } else {
-            (px, h)
-        };
-        let mut png_bytes = Vec::new();
-        {
-            let mut enc = png::Encoder::new(&mut png_bytes, w, h_out);
-            enc.set_color(png::ColorType::Rgba);
-            enc.set_depth(png::BitDepth::Eight);
-            let mut wr = enc.write_header().map_err(|e| cannot(&e))?;
-            wr.write_image_data(&px).map_err(|e| cannot(&e))?;
-            wr.finish().map_err(|e| cannot(&e))?;
-        }
-        write_atomic(&args.output, &png_bytes)?;
-    }
+            Still::Png {
+                transparent: false,
+                legend_exposure: args.legend.then_some(exposure),
+            }
+        },
+    )?;
     println!(
         "{}: {w}×{h}, eye ({:.2}, {:.2}, {:.2}) m looking at ({:.2}, {:.2}, {:.2}) m, fov {}°; {} triangles, {} \
          luminaires; direct light{}{}; {} ({})",
