@@ -135,7 +135,7 @@ pub unsafe extern "C" fn lumi_instance_destroy(
 
 /// Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
 /// (far field), the value a host's lighting shader should reproduce from the look-up tables. An
-/// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
+/// instance of a near-field scan uses the scan's far field (as `lumi_luminaire_lut` does).
 ///
 /// # Safety
 /// `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
@@ -158,15 +158,6 @@ pub unsafe extern "C" fn lumi_instance_illuminance(
             }
             if lux.is_null() {
                 return Err(FfiError::null("lux"));
-            }
-            if let (lum, Luminaire::Nearfield(_)) = instance_luminaire(c, instance)? {
-                return Err(FfiError::invalid(
-                    "instance",
-                    format!(
-                        "instance {instance:#x} draws near-field luminaire {lum:#x} (LUMI_LUMINAIRE_NEARFIELD), which has \
-                         no far-field photometry to compute illuminance from"
-                    ),
-                ));
             }
             let p = glam::Vec3::new(*point, *point.add(1), *point.add(2));
             let n = glam::Vec3::new(*normal, *normal.add(1), *normal.add(2));

@@ -152,16 +152,11 @@ pub(crate) fn luminaire_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Lum
         .map_err(|_| FfiError::invalid("luminaire", format!("no luminaire with handle {lum:#x} (destroyed?)")))
 }
 
-pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<&Photometry, FfiError> {
-    luminaire_of(c, lum)?.photometry().map(|p| p.as_ref()).ok_or_else(|| {
-        FfiError::invalid(
-            "luminaire",
-            format!(
-                "luminaire {lum:#x} is a near-field scan (LUMI_LUMINAIRE_NEARFIELD); this call needs far-field \
-                 photometry (IES or EULUMDAT)"
-            ),
-        )
-    })
+/// The photometry of luminaire handle `lum`: a far-field file's own, or a near-field scan's far
+/// field (estimated from its images on first use, `nearfield::farfield`).
+pub(crate) fn photometry_of(c: &ContextInner, lum: lumi_luminaire) -> Result<Arc<Photometry>, FfiError> {
+    luminaire_of(c, lum)?;
+    Ok(c.renderer.light_of(luminaire_id(c, lum, "luminaire")?)?)
 }
 
 /// The near-field description from C, checked.
@@ -564,8 +559,12 @@ pub unsafe extern "C" fn lumi_luminaire_cameras(
 /// its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 /// be NULL; both are written only on success.
 ///
-/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a near-field
-/// luminaire (`LUMI_LUMINAIRE_NEARFIELD`: it has no far-field photometry).
+/// A near-field scan (`LUMI_LUMINAIRE_NEARFIELD`) answers from its far field, estimated from its
+/// images on the first call that needs it (docs/scene-lighting.md, "Scans as light sources"); the
+/// luminance is then the mean over its measured luminous extent.
+///
+/// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a scan
+/// whose images hold no light.
 ///
 /// # Safety
 /// `ctx` is a live context; non-NULL out-pointers writable.

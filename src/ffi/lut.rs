@@ -50,8 +50,9 @@ pub extern "C" fn lumi_lut_desc_default() -> lumi_lut_desc {
 /// a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
 /// gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
 /// With `buffer` NULL only `required_bytes` is written (a size query). If `buffer_len` is too small:
-/// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field luminaire
-/// (`LUMI_LUMINAIRE_NEARFIELD`) has no table: `LUMI_STATUS_INVALID_ARGUMENT`.
+/// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field scan
+/// (`LUMI_LUMINAIRE_NEARFIELD`) gives the table of its far field, estimated from its images on
+/// the first call that needs it (docs/scene-lighting.md, "Scans as light sources").
 ///
 /// # Safety
 /// `ctx` is a live context; `desc` valid; `buffer` NULL or `buffer_len` writable bytes;

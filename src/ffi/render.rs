@@ -144,7 +144,7 @@ fn options(o: &lumi_render_options) -> Result<RenderOptions, FfiError> {
     })
 }
 
-/// With a scene drawn and its inter-reflection on, every far-field instance must be placed by a
+/// With a scene drawn and its inter-reflection on, every instance must be placed by a
 /// rotation and a translation (photons are traced from it): the first that is not is
 /// `INVALID_ARGUMENT` naming `instance` and its handle.
 fn rigid_for_photons(renderer: &crate::gpu::Renderer, tag: u64) -> Result<(), FfiError> {
@@ -152,11 +152,8 @@ fn rigid_for_photons(renderer: &crate::gpu::Renderer, tag: u64) -> Result<(), Ff
         return Ok(());
     }
     for (id, lum, model) in renderer.instances() {
-        let Ok(crate::gpu::renderer::Luminaire::Farfield(f)) = renderer.luminaire(lum) else {
-            continue;
-        };
         let placed = crate::scene::SceneLuminaire {
-            photometry: f.photometry.clone(),
+            photometry: renderer.light_of(lum)?,
             scene_from_luminaire: model.as_dmat4(),
         };
         if let Err(why) = placed.check_placement() {

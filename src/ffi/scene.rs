@@ -9,9 +9,9 @@
 //!   (nadir −Z, C0 +X) into them, e.g. `scene::placement(x, y, z, yaw)`.
 //! - At most one scene is drawn (`lumi_context_set_scene`); it is uploaded when set, and
 //!   destroying it stops drawing it.
-//! - `lumi_scene_illuminance` lights the scene with every far-field instance of the context at
-//!   the time of the call; near-field instances are skipped (a scan has no far-field intensity to
-//!   trace, and the GPU pass does not light with them either). Out-parameters are written only on
+//! - `lumi_scene_illuminance` lights the scene with every instance of the context at the time of
+//!   the call, as the GPU pass does: a photometric file by its web, a near-field scan by its far
+//!   field (`nearfield::farfield`, estimated from its images on first use). Out-parameters are written only on
 //!   success; every argument is checked before any work.
 
 use std::ffi::c_char;
@@ -23,7 +23,6 @@ use super::context::{lumi_context, with_context, ContextInner};
 use super::handle;
 use super::{lumi_status, path_arg, write_out, FfiError};
 use super::{LUMI_STATUS_INVALID_ARGUMENT, LUMI_STATUS_IO, LUMI_STATUS_OUT_OF_MEMORY, LUMI_STATUS_PARSE};
-use crate::gpu::renderer::Luminaire;
 use crate::gpu::scene::SceneSettings;
 use crate::gpu::{Arg, GpuError, LogLevel};
 use crate::scene::bvh::Bvh;
@@ -415,14 +414,13 @@ unsafe fn surface_points(
 }
 
 /// Illuminance in lux at host-given points of a scene, on the side each normal faces, from every
-/// far-field (photometric) instance of the context placed by its model matrix, with visibility
+/// instance of the context placed by its model matrix (a near-field scan lights by the far field
+/// estimated from its images, as the drawn scene does; docs/scene-lighting.md), with visibility
 /// (the scene's surfaces cast shadows; luminaires and the points themselves do not), computed by
 /// the CPU reference path tracer (docs/scene-lighting.md, "C API"): the direct term from shadow
 /// rays to points on each luminous opening, and with `LUMI_ILLUMINANCE_TOTAL` inter-reflection
 /// between the scene's Lambertian surfaces by path tracing (every bounce: Russian roulette, capped
-/// at 64). Instances of near-field scans are skipped: they add no light (a scan has no far-field
-/// intensity; the drawn scene is not lit by them either). With no far-field instance every point
-/// gets 0 lx. The scene need not be the one `lumi_render` draws.
+/// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render` draws.
 ///
 /// - `points_m`: `3 × count` floats, x, y, z of each point in scene metres (glTF axes, +Y up).
 /// - `normals`: `3 × count` floats, the normal of each point's receiving side (any non-zero
@@ -433,7 +431,7 @@ unsafe fn surface_points(
 /// - `out_std_error_lx`: NULL, or `count` doubles, each estimate's standard error, lux (0 where
 ///   the estimate is exact: direct light from point sources only).
 ///
-/// Both outputs are written only on success. Cost: per point and far-field instance, about
+/// Both outputs are written only on success. Cost: per point and instance, about
 /// `direct_estimates × area_samples` shadow rays, plus one closest-hit and one shadow ray per
 /// bounce of each of `paths_per_point` paths, on every core (measured in docs/scene-lighting.md);
 /// the call holds the context's lock until it is done.
@@ -487,11 +485,8 @@ pub unsafe extern "C" fn lumi_scene_illuminance(
             let points = surface_points(points_m, normals, count)?;
             let mut luminaires = Vec::new();
             for (id, lum, model) in c.renderer.instances() {
-                let Ok(Luminaire::Farfield(f)) = c.renderer.luminaire(lum) else {
-                    continue;
-                };
                 let l = SceneLuminaire {
-                    photometry: f.photometry.clone(),
+                    photometry: c.renderer.light_of(lum)?,
                     scene_from_luminaire: model.as_dmat4(),
                 };
                 if let Err(why) = l.check_placement() {

@@ -201,18 +201,13 @@ impl Renderer {
     /// approximation (the host's shaders evaluate the same formula from the look-up tables).
     pub fn illuminance(&self, id: InstanceId, point: glam::Vec3, normal: glam::Vec3) -> Result<f64, GpuError> {
         let (lum, model) = self.instance(id)?;
-        let Some(p) = self.luminaire(lum)?.photometry() else {
-            return Err(GpuError::invalid(
-                Arg::Instance,
-                "the luminaire has no far-field photometry",
-            ));
-        };
         if !point.is_finite() || !normal.is_finite() || normal.length_squared() < 1e-12 {
             return Err(GpuError::invalid(
                 Arg::PointNormal,
                 "must be finite with a non-zero normal",
             ));
         }
+        let p = self.light_of(lum)?;
         let centre = model.transform_point3(glam::Vec3::ZERO).as_dvec3();
         let to_point = point.as_dvec3() - centre;
         let r2 = to_point.length_squared();
@@ -229,7 +224,7 @@ impl Renderer {
     }
 
     /// Loads a scene for the scene lighting pass (replacing any earlier one): from then on every
-    /// frame draws it lit by every far-field instance, before the luminaires' own appearance.
+    /// frame draws it lit by every instance (a scan by its far field), before the luminaires' own appearance.
     pub fn set_scene(&mut self, scene: &crate::scene::Scene) -> Result<(), GpuError> {
         self.scene.set_scene(&self.ctx, Arc::new(scene.clone()), None)
     }
@@ -259,6 +254,51 @@ impl Renderer {
     /// face size, and how often shadows and VPLs were made.
     pub fn scene_stats(&self) -> crate::gpu::scene::SceneStats {
         self.scene.stats()
+    }
+
+    /// What lights the scene: every instance's photometry and model matrix, in instance order (a
+    /// near-field scan's far field, [`NearfieldLuminaire::far_field`], estimated on first use). Empty
+    /// without a scene.
+    ///
+    /// Errors: a scan whose far field cannot be estimated (its images cannot be read, or hold no
+    /// light).
+    pub fn scene_lights(&self) -> Result<Vec<(Arc<Photometry>, Mat4)>, GpuError> {
+        if !self.scene.has_scene() {
+            return Ok(Vec::new());
+        }
+        let mut out = Vec::with_capacity(self.instances.len());
+        for inst in self.instances.values() {
+            if self.luminaires.contains_key(&inst.luminaire) {
+                out.push((self.light_of(inst.luminaire)?, inst.model));
+            }
+        }
+        Ok(out)
+    }
+
+    /// Gives a near-field luminaire the far field it lights a scene with (one the caller estimated
+    /// already, so it is not estimated again); a far-field luminaire keeps its own photometry.
+    ///
+    /// Errors: an unknown id; a far-field luminaire; a scan whose far field is set or estimated
+    /// already.
+    pub fn set_far_field(&self, id: LuminaireId, p: Arc<Photometry>) -> Result<(), GpuError> {
+        match self.luminaire(id)? {
+            Luminaire::Farfield(_) => Err(GpuError::invalid(
+                Arg::Luminaire,
+                "a far-field luminaire lights with its own photometry",
+            )),
+            Luminaire::Nearfield(n) => n.set_far_field(p),
+        }
+    }
+
+    /// The photometry a luminaire lights a scene with: a far-field file's own, or a scan's far
+    /// field ([`NearfieldLuminaire::far_field`], estimated on first use and kept).
+    ///
+    /// Errors: an unknown id; a scan whose far field cannot be estimated.
+    pub fn light_of(&self, id: LuminaireId) -> Result<Arc<Photometry>, GpuError> {
+        match self.luminaire(id)? {
+            Luminaire::Farfield(f) => Ok(f.photometry.clone()),
+            Luminaire::Nearfield(n) => n.far_field(&self.ctx),
+        }
     }
 
     /// Removes the scene.
@@ -297,7 +337,8 @@ impl Renderer {
                 None => {}
             }
         }
-        let scene = frame::prepare(&mut self.scene, &self.ctx, &view, &far)?;
+        let lights = self.scene_lights()?;
+        let scene = frame::prepare(&mut self.scene, &self.ctx, &view, &lights)?;
         let far = frame::prepare(&mut self.farfield, &self.ctx, &view, &far)?;
         let near = frame::prepare(&mut self.nearfield, &self.ctx, &view, &near)?;
         frame::render(&self.ctx, target, &view, &[&scene, &far, &near])

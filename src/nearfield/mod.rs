@@ -5,6 +5,7 @@ pub mod binning;
 pub mod bvh;
 pub mod coverage;
 pub mod error;
+pub mod farfield;
 pub mod images;
 pub mod layout;
 pub mod manifest;

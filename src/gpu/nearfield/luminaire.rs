@@ -9,10 +9,12 @@ use super::records::PoolLayout;
 use crate::gpu::context::GpuContext;
 use crate::gpu::residency::{ChunkLayout, Residency, Uploads, CHUNK_BYTES, EMPTY};
 use crate::gpu::{Arg, GpuError};
+use crate::nearfield::farfield::{FarField, FarFieldOptions};
 use crate::nearfield::pack::Pack;
 use crate::nearfield::select::lit_bound::{LitDirections, PolygonKind, PolygonVertex, EMPTY_TRIANGLE};
 use crate::nearfield::select::view::view_cells;
 use crate::nearfield::select::{Selection, SelectionMode};
+use crate::photometry::Photometry;
 
 /// A scanned luminaire on the GPU; instances share it.
 pub struct NearfieldLuminaire {
@@ -46,6 +48,8 @@ pub struct NearfieldLuminaire {
     pub(super) proxy: Option<(wgpu::Buffer, u32)>,
     pub(super) gpu_bytes: u64,
     pub(super) budget_bytes: u64,
+    /// Its far-field photometry, estimated from the pack when a scene first needs it.
+    pub(super) far_field: std::sync::OnceLock<Result<Arc<Photometry>, String>>,
 }
 
 impl std::fmt::Debug for NearfieldLuminaire {
@@ -91,6 +95,38 @@ impl NearfieldLuminaire {
             uploads: r.uploads,
             evictions: r.evictions,
         }
+    }
+
+    /// The scan's far-field intensity as photometry ([`FarField::estimate`] over the pack's
+    /// images, default options), estimated on the first call and kept: what lights a scene. Its
+    /// warnings (sparse coverage) go to the context's log.
+    ///
+    /// Errors: the pack's images cannot be read, or hold no light (`luminaire`, naming the pack).
+    pub fn far_field(&self, ctx: &GpuContext) -> Result<Arc<Photometry>, GpuError> {
+        self.far_field
+            .get_or_init(|| {
+                let pack = self.pack.as_ref();
+                let name = pack.path().display().to_string();
+                let ff = FarField::estimate(pack.rayset(), pack, &FarFieldOptions::default(), &|_| {})
+                    .map_err(|e| format!("the far field of {name}: {e}"))?;
+                for w in &ff.warnings {
+                    ctx.log(crate::gpu::context::LogLevel::Warning, w);
+                }
+                ff.photometry(&name)
+                    .map(Arc::new)
+                    .map_err(|e| format!("the far field of {name}: {e}"))
+            })
+            .clone()
+            .map_err(|e| GpuError::invalid(Arg::Luminaire, e))
+    }
+
+    /// Sets the far field [`NearfieldLuminaire::far_field`] returns (one estimated already).
+    ///
+    /// Errors: it is set or estimated already.
+    pub fn set_far_field(&self, p: Arc<Photometry>) -> Result<(), GpuError> {
+        self.far_field
+            .set(Ok(p))
+            .map_err(|_| GpuError::invalid(Arg::Luminaire, "its far field is set or estimated already"))
     }
 
     /// Whether it has a proxy mesh.

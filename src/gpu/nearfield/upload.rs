@@ -102,6 +102,7 @@ impl NearfieldPass {
                 proxy: fixed.proxy,
                 gpu_bytes,
                 budget_bytes: opts.budget_bytes,
+                far_field: std::sync::OnceLock::new(),
             };
             if fully_resident {
                 lum.upload_all(ctx, &all)

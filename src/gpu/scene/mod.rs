@@ -1,5 +1,6 @@
 //! The scene lighting pass (issue 20): a loaded [`Scene`] drawn from the host's camera and lit by
-//! every far-field luminaire instance of the renderer: direct light (absolute candela from each
+//! every luminaire instance of the renderer (a far-field file's photometry, or a near-field scan's
+//! far field, `nearfield::farfield`): direct light (absolute candela from each
 //! photometric web, inverse square, cos i, visibility from cube shadow maps with penumbrae sized by
 //! the luminous opening) plus inter-reflection from virtual point lights (`scene::vpl`). It writes
 //! L = ρ·E/π (cd/m², Lambertian) and depth into the frame's target, before the far-field and
@@ -12,8 +13,8 @@
 //!   calculation points take the normal of the receiving side), the material's linear RGB base
 //!   colour factor and UVs per vertex, and the base-colour textures in one sRGB atlas
 //!   ([`TextureAtlas`]) sampled per fragment as `scene::texture` samples them (for |uv| ≤ 2²⁰).
-//! - Each frame lights with every far-field instance ([`Pass::prepare`]'s instances); near-field
-//!   scans do not light the scene yet. Direct illuminance is the reference's direct estimator
+//! - Each frame lights with every instance ([`Pass::prepare`]'s instances: photometry and model
+//!   matrix; a scan lights as its far field from its luminous extent). Direct illuminance is the reference's direct estimator
 //!   (`scene::reference`) with fixed stratified points on the opening instead of random ones and
 //!   shadow-map visibility instead of shadow rays: shaders/scene/lighting.wgsl says how.
 //! - Shadow maps ([`shadows`]) are rendered inside `prepare`, in their own render pass submitted
@@ -41,11 +42,11 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 
 use super::context::GpuContext;
-use super::farfield::FarfieldLuminaire;
 use super::frame::{FrameView, Pass};
 use super::slots::{DrawSlots, SLOT};
 use super::target::{frame_color_targets, frame_depth_state, ColorFormat, DepthFormat};
 use super::{Arg, GpuError};
+use crate::photometry::Photometry;
 use crate::scene::bvh::Bvh;
 use crate::scene::vpl::{EmissionTable, VplOptions, VplSet};
 use crate::scene::{Scene, SceneLuminaire};
@@ -399,7 +400,7 @@ struct SceneMesh {
 #[derive(Debug)]
 struct IntensityAtlas {
     /// Held, so that an address is never reused for another photometry while it is compared.
-    photometries: Vec<Arc<crate::photometry::Photometry>>,
+    photometries: Vec<Arc<Photometry>>,
     view: wgpu::TextureView,
     per_row: u32,
     max_cd: Vec<f32>,
@@ -458,7 +459,7 @@ struct VplCache {
     buffer: wgpu::Buffer,
     count: u32,
     /// Held, so that an address in the key is never reused for another photometry.
-    _photometries: Vec<Arc<crate::photometry::Photometry>>,
+    _photometries: Vec<Arc<Photometry>>,
 }
 
 /// What a scene pipeline is specialised for.
@@ -493,7 +494,7 @@ pub struct ScenePass {
     /// The scene on the CPU (photons are traced through it) and its hierarchy, built on first use.
     cpu: Option<(Arc<Scene>, Option<Arc<Bvh>>)>,
     /// Emission tables of the photometries seen, kept while they are.
-    emission: Vec<(Arc<crate::photometry::Photometry>, Arc<EmissionTable>)>,
+    emission: Vec<(Arc<Photometry>, Arc<EmissionTable>)>,
     vpls: Option<VplCache>,
     /// A one-VPL zero buffer bound when there is no inter-reflection.
     no_vpls: wgpu::Buffer,
@@ -810,11 +811,7 @@ impl ScenePass {
     ///
     /// Errors: `InvalidArgument` (`Arg::Instance`) for an instance whose model matrix scales,
     /// shears or mirrors (photons need a rotation and a translation); what uploading reports.
-    fn virtual_lights(
-        &mut self,
-        ctx: &GpuContext,
-        instances: &[(Arc<FarfieldLuminaire>, Mat4)],
-    ) -> Result<u32, GpuError> {
+    fn virtual_lights(&mut self, ctx: &GpuContext, instances: &[(Arc<Photometry>, Mat4)]) -> Result<u32, GpuError> {
         let settings = self.settings;
         let (Some(mesh), Some((scene, bvh))) = (&self.mesh, &mut self.cpu) else {
             return Ok(0);
@@ -826,7 +823,7 @@ impl ScenePass {
             mesh.generation,
             instances
                 .iter()
-                .map(|(l, m)| (Arc::as_ptr(&l.photometry) as usize, m.to_cols_array().map(f32::to_bits)))
+                .map(|(l, m)| (Arc::as_ptr(l) as usize, m.to_cols_array().map(f32::to_bits)))
                 .collect::<Vec<_>>(),
             settings.bounce_photons,
         );
@@ -839,21 +836,21 @@ impl ScenePass {
         let bvh = bvh.get_or_insert_with(|| Arc::new(Bvh::build(&scene))).clone();
         // Emission tables: kept for the photometries still in use, made for new ones.
         self.emission
-            .retain(|(p, _)| instances.iter().any(|(l, _)| Arc::ptr_eq(p, &l.photometry)));
+            .retain(|(p, _)| instances.iter().any(|(l, _)| Arc::ptr_eq(p, l)));
         let mut tables = Vec::with_capacity(instances.len());
         let mut luminaires = Vec::with_capacity(instances.len());
         for (lum, model) in instances {
-            let table = match self.emission.iter().find(|(p, _)| Arc::ptr_eq(p, &lum.photometry)) {
+            let table = match self.emission.iter().find(|(p, _)| Arc::ptr_eq(p, lum)) {
                 Some((_, t)) => t.clone(),
                 None => {
-                    let t = Arc::new(EmissionTable::of(&lum.photometry));
-                    self.emission.push((lum.photometry.clone(), t.clone()));
+                    let t = Arc::new(EmissionTable::of(lum));
+                    self.emission.push((lum.clone(), t.clone()));
                     t
                 }
             };
             tables.push(table);
             luminaires.push(SceneLuminaire {
-                photometry: lum.photometry.clone(),
+                photometry: lum.clone(),
                 scene_from_luminaire: model.as_dmat4(),
             });
         }
@@ -865,7 +862,7 @@ impl ScenePass {
         let set = VplSet::generate_with(&scene, &bvh, &luminaires, &tables, &opts).map_err(|e| {
             GpuError::invalid(
                 Arg::Instance,
-                format!("inter-reflection (`luminaires[i]` is the i-th far-field instance in creation order): {e}"),
+                format!("inter-reflection (`luminaires[i]` is the i-th instance in creation order): {e}"),
             )
         })?;
         let records: Vec<VplRecord> = set
@@ -904,7 +901,7 @@ impl ScenePass {
             key,
             buffer,
             count,
-            _photometries: instances.iter().map(|(l, _)| l.photometry.clone()).collect(),
+            _photometries: instances.iter().map(|(l, _)| l.clone()).collect(),
         });
         Ok(count)
     }
@@ -936,18 +933,15 @@ impl ScenePass {
     fn intensity_tables(
         &mut self,
         ctx: &GpuContext,
-        instances: &[(Arc<FarfieldLuminaire>, Mat4)],
+        instances: &[(Arc<Photometry>, Mat4)],
     ) -> Result<Vec<u32>, GpuError> {
-        let mut distinct: Vec<Arc<crate::photometry::Photometry>> = Vec::new();
+        let mut distinct: Vec<Arc<Photometry>> = Vec::new();
         let mut index = Vec::with_capacity(instances.len());
         for (lum, _) in instances {
-            let i = distinct
-                .iter()
-                .position(|p| Arc::ptr_eq(p, &lum.photometry))
-                .unwrap_or_else(|| {
-                    distinct.push(lum.photometry.clone());
-                    distinct.len() - 1
-                });
+            let i = distinct.iter().position(|p| Arc::ptr_eq(p, lum)).unwrap_or_else(|| {
+                distinct.push(lum.clone());
+                distinct.len() - 1
+            });
             index.push(i as u32);
         }
         if distinct.len() > MAX_INTENSITY_TABLES {
@@ -1184,8 +1178,9 @@ impl ScenePass {
 }
 
 impl Pass for ScenePass {
-    /// A far-field luminaire lighting the scene and its model matrix (luminaire frame → world).
-    type Instance = (Arc<FarfieldLuminaire>, Mat4);
+    /// A luminaire's photometry lighting the scene (a far-field file's, or a scan's far field) and
+    /// its model matrix (luminaire frame → world).
+    type Instance = (Arc<Photometry>, Mat4);
     type Prepared = SceneFrame;
 
     /// Prepares a frame: intensity tables, luminaire records, shadow maps (rendered and submitted
@@ -1211,7 +1206,7 @@ impl Pass for ScenePass {
             .enumerate()
             .map(|(i, ((lum, model), t))| {
                 let placed = PlacedLight {
-                    photometry: &lum.photometry,
+                    photometry: lum,
                     model: *model,
                     table: *t,
                     max_cd: max_cd.get(*t as usize).copied().unwrap_or(0.0),

@@ -1,4 +1,5 @@
-//! `lumiview convert`: IES LM-63-2019 ↔ EULUMDAT (`photometry::convert`). One input writes the
+//! `lumiview convert`: IES LM-63-2019 ↔ EULUMDAT (`photometry::convert`), and a near-field scan
+//! (pack, manifest or ray file) → its far field as IES or EULUMDAT (`nearfield::farfield`). One input writes the
 //! named file; several inputs or a folder write into an output folder and print one table (CSV, or
 //! JSON lines with `--json`), continuing past a file that cannot be read. What the target format
 //! cannot keep is listed on stderr.
@@ -16,7 +17,8 @@ use crate::LoadArgs;
 /// Arguments of `lumiview convert`.
 #[derive(Args, Debug)]
 pub struct ConvertArgs {
-    /// IES (.ies) or EULUMDAT (.ldt) files, or folders of them.
+    /// IES (.ies) or EULUMDAT (.ldt) files, or folders of them; or a near-field scan (.lvpack,
+    /// scan manifest, TM-25 ray file), written as its far field estimated from its images.
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
     /// Output: a file ending in .ies or .ldt for one input, or a folder (created if missing) for
@@ -57,6 +59,16 @@ impl Target {
             _ => None,
         }
     }
+}
+
+/// Reads an input: photometry with the load options, or a near-field scan (pack, manifest, ray
+/// file) as its far field estimated from its images (`nearfield::farfield`, progress on stderr).
+fn load_input(path: &Path, args: &LoadArgs) -> Result<Photometry, Box<dyn std::error::Error>> {
+    let kind = lumiview::source::detect(path)?;
+    if kind.is_scan() {
+        return Ok(super::scene::scan_light(path, kind)?.0);
+    }
+    load_quiet(path, args)
 }
 
 fn convert_one(p: &Photometry, target: Target, out: &Path) -> Result<Converted, Box<dyn std::error::Error>> {
@@ -119,7 +131,7 @@ pub fn convert(a: &ConvertArgs) -> CliResult {
             )
             .into());
         }
-        let p = load_quiet(&inputs[0], &a.load)?;
+        let p = load_input(&inputs[0], &a.load)?;
         for w in &p.warnings {
             eprintln!("lumiview: warning: {w}");
         }
@@ -163,7 +175,7 @@ pub fn convert(a: &ConvertArgs) -> CliResult {
     let mut failed = 0usize;
     for input in &inputs {
         let result = (|| -> Result<(PathBuf, Converted, Target), Box<dyn std::error::Error>> {
-            let p = load_quiet(input, &a.load)?;
+            let p = load_input(input, &a.load)?;
             for w in &p.warnings {
                 eprintln!("lumiview: warning: {w}");
             }

@@ -1,4 +1,5 @@
-//! `lumiview scene`: a glTF scene lit by photometric luminaires. Without `--grid`, a view rendered
+//! `lumiview scene`: a glTF scene lit by photometric luminaires and near-field scans (by their far
+//! field, `nearfield::farfield`; the view draws a scan with its measured appearance). Without `--grid`, a view rendered
 //! on the GPU (Vulkan) as a host would get it: the lit room in cd/m² (L = ρE/π, direct light with
 //! shadow maps and inter-reflection from virtual point lights) with the luminaires' own appearance, as PNG (tone-mapped) or OpenEXR (cd/m²). With
 //! `--grid H`, the illuminance in lx on the work plane y = H, computed by the reference path
@@ -12,17 +13,20 @@ use std::time::Instant;
 
 use clap::Args;
 use glam::Vec3;
+use lumiview::gpu::nearfield::NearfieldOptions;
 use lumiview::gpu::scene::SceneSettings;
 use lumiview::gpu::{
     Attachment, ColorFormat, ContextDesc, DepthFormat, DepthRange, HostCamera, Origin, OutputMode, Overlays,
     RenderOptions, RenderTarget, Renderer, TargetDesc,
 };
+use lumiview::nearfield::farfield::{FarField, FarFieldOptions};
+use lumiview::nearfield::pack::Pack;
 use lumiview::photometry::Photometry;
 use lumiview::scene::grid::{work_plane_grid, write_grid_csv, FloorRect};
 use lumiview::scene::place::parse_luminaire_arg;
 use lumiview::scene::plot::{fmt_lx, GridPlot, GridStats};
 use lumiview::scene::{Scene, SceneLuminaire, TraceOptions, Tracer};
-use lumiview::source::{self, SourceKind};
+use lumiview::source::{self, Source, SourceKind, SourceOptions};
 
 use super::render::{look_at, parse_camera, percentile_luminance, perspective, write_still, Still};
 use super::CliResult;
@@ -34,7 +38,9 @@ pub struct SceneArgs {
     /// glTF 2.0 scene (.glb, or .gltf with its buffers): metres, +Y up; surfaces are Lambertian
     /// with the base colour as reflectance. The sample office: assets/scenes/office.glb.
     pub scene: PathBuf,
-    /// A luminaire placed in the scene: an IES or EULUMDAT file, its photometric centre at X,Y,Z
+    /// A luminaire placed in the scene: an IES or EULUMDAT file, or a near-field scan (.lvpack,
+    /// manifest, TM-25 ray file) lighting by its far field estimated from its images, its
+    /// photometric centre at X,Y,Z
     /// (scene metres), nadir along −Y, C0 along +X turned by YAW degrees about +Y (counter-clockwise
     /// seen from above). Repeat for more; the same file may be placed many times.
     #[arg(
@@ -107,7 +113,10 @@ pub struct SceneArgs {
 /// A luminaire of the command line: its photometry (shared by placements of one file), matrix
 /// and position.
 struct Placed {
+    /// What lights the scene (a scan's far field for a scan).
     photometry: Arc<Photometry>,
+    /// The scan, drawn with its measured appearance in the view.
+    pack: Option<Arc<Pack>>,
     matrix: glam::DMat4,
     position_m: glam::DVec3,
 }
@@ -135,36 +144,66 @@ fn parse_rect(text: &str) -> Result<FloorRect, String> {
     }
 }
 
-/// Reads every `--luminaire`: each file once, photometric files only.
+/// Reads every `--luminaire`: each file once. A near-field scan (a pack, manifest or ray file)
+/// lights by its far field, estimated from its images (`nearfield::farfield`, with a progress
+/// bar and a line saying what it found); the view draws it with its measured appearance.
 fn luminaires(args: &SceneArgs) -> Result<Vec<Placed>, Box<dyn std::error::Error>> {
-    let mut loaded: HashMap<PathBuf, Arc<Photometry>> = HashMap::new();
+    type Loaded = (Arc<Photometry>, Option<Arc<Pack>>);
+    let mut loaded: HashMap<PathBuf, Loaded> = HashMap::new();
     let mut out = Vec::new();
     for text in &args.luminaires {
         let (file, at) = parse_luminaire_arg(text).map_err(|e| format!("--luminaire: {e}"))?;
-        let photometry = match loaded.get(&file) {
-            Some(p) => p.clone(),
+        let (photometry, pack) = match loaded.get(&file) {
+            Some(l) => l.clone(),
             None => {
                 let kind = source::detect(&file)?;
-                if kind != SourceKind::Photometry {
-                    return Err(format!(
-                        "--luminaire {text}: {} is a near-field scan; scenes are lit by photometric files (IES, EULUMDAT) \
-                         for now",
-                        file.display()
-                    )
-                    .into());
-                }
-                let p = Arc::new(super::load(&file, &args.load)?);
-                loaded.insert(file.clone(), p.clone());
-                p
+                let l: Loaded = if kind == SourceKind::Photometry {
+                    (Arc::new(super::load(&file, &args.load)?), None)
+                } else {
+                    let (p, pack) = scan_light(&file, kind)?;
+                    (Arc::new(p), Some(Arc::new(pack)))
+                };
+                loaded.insert(file.clone(), l.clone());
+                l
             }
         };
         out.push(Placed {
             photometry,
+            pack,
             matrix: at.matrix(),
             position_m: glam::DVec3::new(at.x_m, at.y_m, at.z_m),
         });
     }
     Ok(out)
+}
+
+/// Opens the scan `file` (packing a manifest or ray file into the cache first) and estimates its
+/// far field, with a progress bar; prints what it found and its warnings on stderr.
+pub(super) fn scan_light(file: &Path, kind: SourceKind) -> Result<(Photometry, Pack), Box<dyn std::error::Error>> {
+    let mut warnings = Vec::new();
+    let Source::Scan { pack, .. } = source::open(file, kind, &SourceOptions::default(), &mut warnings)? else {
+        return Err(format!("{}: opened as photometry, not as a scan", file.display()).into());
+    };
+    for w in &warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    let bar = super::proxy::bar(false, "far field");
+    let ff = FarField::estimate(pack.rayset(), &pack, &FarFieldOptions::default(), &|f| {
+        super::proxy::show_stage(&bar, "cameras", (f * 1000.0) as usize, 1000)
+    })?;
+    bar.finish_and_clear();
+    for w in &ff.warnings {
+        eprintln!("lumiview: warning: {w}");
+    }
+    let name = file.display().to_string();
+    let p = ff.photometry(&name)?;
+    let e = ff.extent_m;
+    eprintln!(
+        "lumiview: {name}: far field of the scan from {} cameras: {:.1} lm, kernel σ {:.2}°, luminous extent \
+         {:.3} × {:.3} × {:.3} m (X × Y × Z)",
+        ff.cameras_used, ff.flux_lm, ff.bandwidth_deg, e.x, e.y, e.z
+    );
+    Ok((p, pack))
 }
 
 /// Runs `lumiview scene`.
@@ -439,7 +478,22 @@ fn view(args: &SceneArgs, scene: &Scene, placed: &[Placed]) -> CliResult {
         let lum = match ids.get(&key) {
             Some(&id) => id,
             None => {
-                let id = r.add_photometry(p.photometry.clone())?;
+                let id = match &p.pack {
+                    None => r.add_photometry(p.photometry.clone())?,
+                    Some(pack) => {
+                        let (proxy, bound) = match pack.proxy() {
+                            Some(pp) => (Some(pp.triangles.clone()), pp.bound),
+                            None => (None, false),
+                        };
+                        let opts = NearfieldOptions {
+                            proxy_is_bound: bound,
+                            ..NearfieldOptions::default()
+                        };
+                        let id = r.add_pack(pack.clone(), proxy, &opts)?;
+                        r.set_far_field(id, p.photometry.clone())?;
+                        id
+                    }
+                };
                 ids.insert(key, id);
                 id
             }
