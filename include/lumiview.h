@@ -560,7 +560,7 @@ lumi_status lumi_instance_destroy(struct lumi_context *ctx, lumi_instance instan
 
 // Illuminance (lux) at a world point with unit surface normal from one instance: E = I cos i / r²
 // (far field), the value a host's lighting shader should reproduce from the look-up tables. An
-// instance of a near-field luminaire is `LUMI_STATUS_INVALID_ARGUMENT` (no far-field photometry).
+// instance of a near-field scan uses the scan's far field (as `lumi_luminaire_lut` does).
 //
 // # Safety
 // `ctx` is a live context; `point` and `normal` point to 3 floats; `lux` writable.
@@ -693,8 +693,12 @@ lumi_status lumi_luminaire_cameras(const struct lumi_context *ctx,
 // its luminous opening seen from there (0 where the projected area is zero). Either out-pointer may
 // be NULL; both are written only on success.
 //
-// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a near-field
-// luminaire (`LUMI_LUMINAIRE_NEARFIELD`: it has no far-field photometry).
+// A near-field scan (`LUMI_LUMINAIRE_NEARFIELD`) answers from its far field, estimated from its
+// images on the first call that needs it (docs/scene-lighting.md, "Scans as light sources"); the
+// luminance is then the mean over its measured luminous extent.
+//
+// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a scan
+// whose images hold no light.
 //
 // # Safety
 // `ctx` is a live context; non-NULL out-pointers writable.
@@ -713,8 +717,9 @@ struct lumi_lut_desc lumi_lut_desc_default(void);
 // a 1D table at cos γ = 1 − 2i/(N−1)), in the encoding asked for (f32/f16 little-endian, or 8-bit
 // gamma 2.2). `max_intensity_cd` (may be NULL) receives the maximum used for normalising.
 // With `buffer` NULL only `required_bytes` is written (a size query). If `buffer_len` is too small:
-// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field luminaire
-// (`LUMI_LUMINAIRE_NEARFIELD`) has no table: `LUMI_STATUS_INVALID_ARGUMENT`.
+// `LUMI_STATUS_BUFFER_TOO_SMALL`, and `required_bytes` still says the size. A near-field scan
+// (`LUMI_LUMINAIRE_NEARFIELD`) gives the table of its far field, estimated from its images on
+// the first call that needs it (docs/scene-lighting.md, "Scans as light sources").
 //
 // # Safety
 // `ctx` is a live context; `desc` valid; `buffer` NULL or `buffer_len` writable bytes;
@@ -834,14 +839,13 @@ lumi_status lumi_context_set_scene_settings(struct lumi_context *ctx,
                                             const struct lumi_scene_settings *settings);
 
 // Illuminance in lux at host-given points of a scene, on the side each normal faces, from every
-// far-field (photometric) instance of the context placed by its model matrix, with visibility
+// instance of the context placed by its model matrix (a near-field scan lights by the far field
+// estimated from its images, as the drawn scene does; docs/scene-lighting.md), with visibility
 // (the scene's surfaces cast shadows; luminaires and the points themselves do not), computed by
 // the CPU reference path tracer (docs/scene-lighting.md, "C API"): the direct term from shadow
 // rays to points on each luminous opening, and with `LUMI_ILLUMINANCE_TOTAL` inter-reflection
 // between the scene's Lambertian surfaces by path tracing (every bounce: Russian roulette, capped
-// at 64). Instances of near-field scans are skipped: they add no light (a scan has no far-field
-// intensity; the drawn scene is not lit by them either). With no far-field instance every point
-// gets 0 lx. The scene need not be the one `lumi_render` draws.
+// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render` draws.
 //
 // - `points_m`: `3 × count` floats, x, y, z of each point in scene metres (glTF axes, +Y up).
 // - `normals`: `3 × count` floats, the normal of each point's receiving side (any non-zero
@@ -852,7 +856,7 @@ lumi_status lumi_context_set_scene_settings(struct lumi_context *ctx,
 // - `out_std_error_lx`: NULL, or `count` doubles, each estimate's standard error, lux (0 where
 //   the estimate is exact: direct light from point sources only).
 //
-// Both outputs are written only on success. Cost: per point and far-field instance, about
+// Both outputs are written only on success. Cost: per point and instance, about
 // `direct_estimates × area_samples` shadow rays, plus one closest-hit and one shadow ray per
 // bounce of each of `paths_per_point` paths, on every core (measured in docs/scene-lighting.md);
 // the call holds the context's lock until it is done.

@@ -453,3 +453,71 @@ fn scene_options_that_do_not_apply_and_bad_placements_are_named() {
     ]);
     assert!(stderr_of(&out).contains("missing.glb"), "{}", stderr_of(&out));
 }
+
+/// A near-field scan lights a scene and converts to IES by its far field, estimated from its
+/// images: the synthetic Lambertian disc (r = 0.1 m, 10,000 cd/m², facing down; Φ = π²·L·r² =
+/// 986.96 lm) packed small; `convert` writes IES whose flux and nadir intensity are the disc's
+/// (within 2 %), and `scene --grid` over the office puts E = L·π·r² / (r² + h²) under it (within
+/// 3 %), both independent of the estimator.
+#[test]
+fn a_scan_converts_to_ies_and_lights_a_scene_by_its_far_field() {
+    let dir = std::env::temp_dir().join(format!("lumiview-cli-scan-light-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let pack = dir.join("disc.lvpack");
+    let p = pack.to_str().unwrap();
+    let out = lumiview(&[
+        "pack",
+        "--synth",
+        "disc",
+        "--layout",
+        "fibonacci:600",
+        "--size",
+        "32x32",
+        "--no-proxy",
+        "-o",
+        p,
+    ]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let ies = dir.join("disc.ies");
+    let out = lumiview(&["convert", p, "-o", ies.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    assert!(stderr_of(&out).contains("far field of the scan"), "{}", stderr_of(&out));
+    let v = json(&["info", ies.to_str().unwrap(), "--json"]);
+    let flux = v["integrated_flux_lm"].as_f64().unwrap_or_else(|| panic!("{v}"));
+    let truth = std::f64::consts::PI.powi(2) * 10_000.0 * 0.01;
+    assert!((flux / truth - 1.0).abs() < 0.02, "{flux} lm vs {truth}");
+    let i0 = json(&["sample", ies.to_str().unwrap(), "--at", "0,0", "--json"])["samples"][0]["cd"]
+        .as_f64()
+        .unwrap();
+    assert!((i0 / (truth / std::f64::consts::PI) - 1.0).abs() < 0.02, "I(0) {i0}");
+
+    let csv = dir.join("grid.csv");
+    let lum = format!("{p}@0,1.75,0");
+    let out = lumiview(&[
+        "scene",
+        "assets/scenes/office.glb",
+        "--luminaire",
+        &lum,
+        "--grid",
+        "0.75",
+        "--grid-rect",
+        "-0.05,-0.05,0.05,0.05",
+        "--spacing",
+        "0.1",
+        "--direct-only",
+        "-o",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr_of(&out));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let row: Vec<f64> = text
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let analytic = 10_000.0 * std::f64::consts::PI * 0.01 / 1.01;
+    assert!((row[3] / analytic - 1.0).abs() < 0.03, "{row:?} vs {analytic} lx");
+    let _ = std::fs::remove_dir_all(&dir);
+}
