@@ -458,11 +458,16 @@ static int run_nearfield(lumi_context *ctx, const lv_scan_files *files, lumi_tar
         failed++;
         goto done;
     }
-    /* A far-field-only call on it must be refused, not answered. */
+    /* The far-field calls answer for a scan from the far field estimated from its images (what lights
+       a scene): a finite, positive intensity below it. */
     double cd = -1.0;
-    if (lumi_luminaire_sample(ctx, lum, 0.0, 0.0, &cd, NULL) != LUMI_STATUS_INVALID_ARGUMENT || cd != -1.0) {
-        fprintf(stderr, "headless: lumi_luminaire_sample on a near-field luminaire did not fail cleanly\n");
+    if (!lv_lumi_ok(lumi_luminaire_sample(ctx, lum, 0.0, 0.0, &cd, NULL), "lumi_luminaire_sample (near-field)") ||
+        !(cd > 0.0 && cd < 1e9)) {
+        fprintf(stderr, "headless: lumi_luminaire_sample on a near-field luminaire gave no far-field intensity (%g cd)\n",
+                cd);
         failed++;
+    } else {
+        printf("near-field luminaire: far field estimated from its images, I(C 0, γ 0) = %.2f cd\n", cd);
     }
     float model[16];
     lv_mat4_identity(model);
