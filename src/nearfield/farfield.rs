@@ -30,7 +30,8 @@
 //!   below 1 mm or two pixel footprints are 0. The IES text gives it as the luminous opening (a box, centred on the
 //!   photometric centre), so penumbrae take the luminaire's size.
 //! - Directions no camera covers (a one-hemisphere scan) get no light, with a warning naming the
-//!   share of the sphere missing; a camera's cell is capped at 4 × the median cell.
+//!   share of the sphere missing; a camera's cell is capped at 4 × the median cell. A scan without
+//!   a lit pixel has a far field of 0 cd, with a warning: it lights nothing.
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -74,7 +75,8 @@ pub struct FarField {
     pub bandwidth_deg: f64,
     /// Cameras read.
     pub cameras_used: usize,
-    /// Share of the sphere of directions within 2 σ + one camera cell of a camera (0…1).
+    /// Share of the sphere of directions within 2 √(median camera cell) of a camera (0…1): what the
+    /// layout covers.
     pub covered_fraction: f64,
     /// Luminous extent along X, Y, Z of the luminaire frame (m).
     pub extent_m: DVec3,
@@ -153,8 +155,8 @@ impl FarField {
     /// `progress(fraction)` is called as cameras are read.
     ///
     /// Errors: an image that cannot be read or does not match its camera's intrinsics (naming the
-    /// camera), a scan without a lit pixel (`scan`), `max_cameras` 0 or a bandwidth outside
-    /// 0.1…30° (`options`).
+    /// camera), rays whose flux is not finite (`scan`), `max_cameras` 0 or a bandwidth outside
+    /// 0.1…30° (`options`). A scan without a lit pixel is a far field of 0 cd with a warning.
     pub fn estimate(
         set: &RayImageSet,
         images: &dyn ImageSource,
@@ -176,8 +178,14 @@ impl FarField {
         let all_dirs: Vec<DVec3> = set.cameras.iter().map(|c| c.direction_from(centre)).collect();
         let used = camera_subset(&all_dirs, opts.max_cameras);
         let dirs: Vec<DVec3> = used.iter().map(|&i| all_dirs[i]).collect();
-        let (mut omega, _) = NearestDirection::new(&dirs).solid_angles();
-        let mut sorted: Vec<f64> = omega.iter().copied().filter(|w| *w > 0.0).collect();
+        // Exact Voronoi cells; a cell reaching beyond ~85° (the open side of a one-hemisphere
+        // scan) is capped below, so it needs no sampled estimate.
+        let lookup = NearestDirection::new(&dirs);
+        let cells: Vec<Option<f64>> = (0..dirs.len())
+            .into_par_iter()
+            .map(|i| lookup.cell_solid_angle(i))
+            .collect();
+        let mut sorted: Vec<f64> = cells.iter().flatten().copied().filter(|w| *w > 0.0).collect();
         sorted.sort_by(f64::total_cmp);
         let Some(&median) = sorted.get(sorted.len() / 2) else {
             return Err(NearfieldError::invalid(
@@ -187,9 +195,7 @@ impl FarField {
         };
         let p98 = sorted[(sorted.len() * 49 / 50).min(sorted.len() - 1)];
         let cap = 4.0 * median;
-        for w in &mut omega {
-            *w = w.min(cap);
-        }
+        let omega: Vec<f64> = cells.iter().map(|w| w.unwrap_or(cap).min(cap)).collect();
         // Pixel angle: the smallest 1/f of any camera (rad).
         let pixel_rad = used
             .iter()
@@ -269,10 +275,16 @@ impl FarField {
                 }
             }
         }
-        if total_flux <= 0.0 || !total_flux.is_finite() {
+        if !total_flux.is_finite() {
             return Err(NearfieldError::invalid(
                 "scan",
-                format!("{name}: no camera sees a lit pixel: there is no light to tabulate"),
+                format!("{name}: the rays' flux is not finite (a luminance or a camera pose out of range)"),
+            ));
+        }
+        let mut warnings = Vec::new();
+        if total_flux <= 0.0 {
+            warnings.push(format!(
+                "{name}: no camera sees a lit pixel: its far field is 0 cd everywhere and it lights nothing"
             ));
         }
 
@@ -365,9 +377,8 @@ impl FarField {
             .collect();
         progress(0.95);
 
-        // Coverage: directions within 2σ + a cell of some camera.
-        let lookup = NearestDirection::new(&dirs);
-        let near_enough = (2.0 * sigma + cap.sqrt()).cos();
+        // Coverage: directions within 2 √(median cell) of some camera.
+        let near_enough = (2.0 * median.sqrt()).cos();
         let samples = 20_000;
         let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
         let covered = (0..samples)
@@ -380,7 +391,6 @@ impl FarField {
             })
             .count();
         let covered_fraction = covered as f64 / samples as f64;
-        let mut warnings = Vec::new();
         if covered_fraction < 0.99 {
             warnings.push(format!(
                 "{name}: the cameras cover {:.1} % of the sphere of directions; light towards the rest is \
@@ -593,5 +603,53 @@ mod tests {
         }
         assert!((p.flux_lm() / flux - 1.0).abs() < 0.01, "{} vs {flux}", p.flux_lm());
         assert!((p.opening.size_x_m - ff.extent_m.x).abs() < 1e-6 && p.opening.height_m == 0.0);
+    }
+
+    /// One hemisphere of cameras: the downward disc keeps its flux, and the warning names the
+    /// scan and the missing half. All images dark: 0 cd everywhere, a warning, photometry that loads.
+    #[test]
+    fn partial_and_dark_scans_are_said_not_hidden() {
+        use crate::nearfield::rayset::MemorySource;
+        let s = scan("disc", 600, 24);
+        let lower: Vec<usize> = (0..s.set.cameras.len())
+            .filter(|&i| s.set.cameras[i].position_m.z < 0.0)
+            .collect();
+        let mut set = s.set.clone();
+        set.cameras = lower.iter().map(|&i| s.set.cameras[i].clone()).collect();
+        let images = MemorySource {
+            images: lower.iter().map(|&i| s.source.image(i).unwrap()).collect(),
+        };
+        let ff = FarField::estimate(&set, &images, &FarFieldOptions::default(), &|_| {}).unwrap();
+        let flux = crate::nearfield::synth::luminaire("disc").unwrap().flux_lm();
+        assert!((ff.flux_lm / flux - 1.0).abs() < 0.02, "{} vs {flux}", ff.flux_lm);
+        assert!(
+            ff.covered_fraction > 0.4 && ff.covered_fraction < 0.7,
+            "{}",
+            ff.covered_fraction
+        );
+        assert_eq!(ff.warnings.len(), 1, "{:?}", ff.warnings);
+        assert!(
+            ff.warnings[0].contains("of the sphere of directions"),
+            "{:?}",
+            ff.warnings
+        );
+
+        let dark = MemorySource {
+            images: images
+                .images
+                .iter()
+                .map(|im| crate::nearfield::rayset::LuminanceImage::zeros(im.width, im.height))
+                .collect(),
+        };
+        let ff = FarField::estimate(&set, &dark, &FarFieldOptions::default(), &|_| {}).unwrap();
+        assert_eq!(ff.flux_lm, 0.0);
+        assert!(ff.candela.iter().flatten().all(|v| *v == 0.0));
+        assert!(
+            ff.warnings.iter().any(|w| w.contains("lights nothing")),
+            "{:?}",
+            ff.warnings
+        );
+        let p = ff.photometry("dark").unwrap();
+        assert_eq!(p.intensity(0.0, 0.0), 0.0);
     }
 }
