@@ -37,15 +37,15 @@ fn tmp(name: &str) -> PathBuf {
 }
 
 /// Chamfer distance (mm) to the true proxy within half the limit (1 % of the bounding
-/// diameter or two capture-pixel footprints), the flat parts collapsed onto their middle, and nearly
-/// all lit pixels explained, at rigo:300 (the default layout of `lumiview proxy --synth`). Measured
-/// (this set-up): disc mean 0.52 mm, p95 1.27 mm (limit 5.57), coverage 1.000; two-planes mean 0.69
-/// mm, p95 1.96 mm (limit 6.66), coverage 1.000. At rigo:150 (rings 15° apart) the one-sided rule's
-/// free plane (carve.rs) leaves a floating lens under the disc (mean 1.60 mm, max 25 mm; a known
-/// limit, docs/proxy.md); with the fixed plane it had: 0.47 / 1.12 mm and 0.91 / 2.15 mm there.
+/// diameter or two capture-pixel footprints), the flat parts collapsed onto their middle and put on
+/// the plane the images agree on, and nearly all lit pixels explained, at rigo:300 (the default
+/// layout of `lumiview proxy --synth`), 128 × 128 px. Measured (this set-up): disc mean 0.13 mm, p95
+/// 0.14 mm (limit 5.57); two-planes 0.26 / 0.95 mm (limit 6.66); star-panel 0.09 / 0.07 mm (limit
+/// 8.92); coverage 0.995–1.000. Before the flat-part step (docs/proxy.md, step 5): disc 0.52 / 1.27
+/// mm, two-planes 0.69 / 1.96 mm.
 #[test]
 fn reconstruction_is_near_the_true_proxy() {
-    for (name, max_mean_mm) in [("disc", 0.7), ("two-planes", 1.0)] {
+    for (name, max_mean_mm) in [("disc", 0.3), ("two-planes", 0.5), ("star-panel", 0.5)] {
         let o = opts(name, 300, 3);
         let scan = synth_scan(&o).unwrap();
         let mut warnings = Vec::new();
@@ -65,10 +65,17 @@ fn reconstruction_is_near_the_true_proxy() {
             rec.report.coverage, rec.report.triangles
         );
         assert!(
-            p95_mm <= 0.5 * limit_mm,
-            "{name}: p95 {p95_mm:.2} mm above half the limit {limit_mm:.2} mm"
+            p95_mm <= 0.25 * limit_mm,
+            "{name}: p95 {p95_mm:.2} mm above a quarter of the limit {limit_mm:.2} mm"
         );
         assert!(rec.report.collapsed_vertices > 0, "{name}: nothing collapsed");
+        // Put on the plane the images agree on: most of the mesh's vertices in flat parts.
+        let flat: usize = rec.report.flat_parts.iter().map(|f| f.vertices + f.absorbed).sum();
+        assert!(
+            2 * flat > rec.mesh.vertices.len(),
+            "{name}: {flat} of {} vertices in flat parts",
+            rec.mesh.vertices.len()
+        );
         assert!(
             mean_mm <= max_mean_mm,
             "{name}: mean {mean_mm:.2} mm above {max_mean_mm} mm"
@@ -84,9 +91,10 @@ fn reconstruction_is_near_the_true_proxy() {
     }
 }
 
-/// The known limit at a sparse layout (docs/proxy.md): at rigo:150 the disc keeps a floating lens
-/// bottom 21–25 mm in front of it (measured mean 1.60 mm, max 25 mm, coverage 1.000). Held so that
-/// it cannot quietly get worse, and so that a fix shows here.
+/// The known limit at a sparse layout (docs/proxy.md): at rigo:150 the disc keeps part of a
+/// floating lens bottom in front of it (measured mean 0.87 mm, max 17.9 mm; before the flat-part
+/// step 1.60 mm and 25 mm: the uniform disc gives the luminance test little to tell the lens from
+/// the disc by). Held so that it cannot quietly get worse, and so that a fix shows here.
 #[test]
 fn a_sparse_layout_leaves_a_bounded_lens_under_the_disc() {
     let o = opts("disc", 150, 3);
@@ -100,7 +108,7 @@ fn a_sparse_layout_leaves_a_bounded_lens_under_the_disc() {
     let (mean_mm, max_mm) = (c.mean_m * 1e3, c.max_m * 1e3);
     eprintln!("disc at rigo:150: mean {mean_mm:.2} mm, max {max_mm:.2} mm");
     assert!(
-        mean_mm <= 2.0 && max_mm <= 30.0,
+        mean_mm <= 1.2 && max_mm <= 22.0,
         "mean {mean_mm:.2} mm, max {max_mm:.2} mm"
     );
 }

@@ -55,8 +55,9 @@ const SNIFF_BYTES: usize = 4096;
 
 /// Cache format: part of every key, so a change of the defaults below invalidates old entries.
 const CACHE_VERSION: &str =
-    "lumiview scan cache 5: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict with a \
-     reconstructed proxy v3 (thin parts collapsed, free grazing plane, stray parts dropped)";
+    "lumiview scan cache 6: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict with a \
+     reconstructed proxy v4 (thin parts collapsed, free grazing plane, stray parts dropped, flat parts on the \
+     plane the images agree on)";
 
 /// Reads the first bytes of `path` and says which kind of scan file it is, or `None` for anything
 /// else (photometry, garbage).

@@ -4,9 +4,9 @@
 //! **Status (issue 17, in progress):** `lumiview pack` (manifests, `--synth`) and the loaders of
 //! `render` and `lumi_luminaire_load` (manifests) store it as the pack's proxy through
 //! [`scan_proxy`]; `lumiview proxy` writes it as glTF and measures it (docs/proxy.md). Measured on
-//! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 within 1 % of the
-//! bounding diameter for `two-planes` and `rect`, 1.1–1.2 % for `disc`, `star-panel` and `cos1`;
-//! nothing survives for `strips`, `led-dots`, `cos10`, `cos100`, `reflector` and `peak` (small
+//! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 0.02–0.2 mm
+//! (0.016–0.07 % of the bounding diameter) for `disc`, `rect`, `star-panel`, `two-planes` and
+//! `cos1`; nothing survives for `strips`, `led-dots`, `cos10`, `cos100`, `reflector` and `peak` (small
 //! features seen edge-on, beams narrower than the camera spacing, a mirror): those scans render
 //! without a proxy, with a warning.
 //!
@@ -26,19 +26,22 @@
 //!    [`ReconstructOptions::grazing_deg`] of its plane are not counted).
 //! 4. **Mesh** ([`mesh`]): naive surface nets over the surviving cells, Taubin-smoothed within each
 //!    cell.
-//! 5. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
+//! 5. **Flat parts** ([`refine`]): each part that is flat within a cell is put on the plane its
+//!    cameras' images agree on (luminance consistency), with the vertices of a lens in front of it
+//!    that the cameras see better on the plane.
+//! 6. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
 //!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
 //!    light it misses).
 //!
-//! Without luminance consistency (not yet done) a flat emitter comes out as a thin lens whose
-//! thickness the most grazing cameras set, and what is hidden behind a lit surface from every
-//! camera is filled in. Pure CPU, both cores (rayon); memory is the masks (a few tens of KB per
+//! Luminance consistency is used for flat parts only: a curved emitter keeps its carved surface,
+//! about a cell off, and what is hidden behind a lit surface from every camera is filled in. Pure CPU, both cores (rayon); memory is the masks (a few tens of KB per
 //! camera) plus one byte per finest cell.
 
 pub mod carve;
 pub mod hemisphere;
 pub mod mask;
 pub mod mesh;
+pub mod refine;
 
 use std::time::Instant;
 
@@ -77,6 +80,8 @@ pub struct ReconstructOptions {
     /// explains more. Default false: experimental (docs/proxy.md: it keeps most of the content
     /// ball, takes minutes and gives meshes of up to a million triangles).
     pub directional_fallback: bool,
+    /// Move flat parts onto the plane the cameras agree on ([`refine`]); default true.
+    pub refine_flat: bool,
 }
 
 impl Default for ReconstructOptions {
@@ -89,6 +94,7 @@ impl Default for ReconstructOptions {
             grazing_deg: 1.0,
             thin_fraction: 0.05,
             directional_fallback: false,
+            refine_flat: true,
         }
     }
 }
@@ -167,6 +173,8 @@ pub struct ReconstructReport {
     pub stray_triangles: usize,
     /// Whether the directional rule's carving was kept (the one-sided rule's explained too little).
     pub directional: bool,
+    /// The flat parts moved onto the plane their cameras agree on ([`refine`]), one entry each.
+    pub flat_parts: Vec<refine::PlaneFit>,
     /// Seconds reading images and building masks, carving, meshing.
     pub seconds: [f64; 3],
 }
@@ -385,13 +393,38 @@ pub fn reconstruct(
     }
     let Attempt {
         occupancy,
-        mesh,
+        mut mesh,
         rule,
         coverage,
         collapsed_vertices,
         collapsed_coverage,
         stray_triangles,
     } = best;
+    // Flat parts onto the plane the images agree on, from up to REFINE_CAMERAS cameras spread over
+    // the sphere (read again: the masks kept no luminance).
+    let flat_parts = if opts.refine_flat && !mesh.triangles.is_empty() {
+        let picks: Vec<usize> = carve::spread_order(chosen.len())
+            .into_iter()
+            .take(REFINE_CAMERAS)
+            .map(|k| chosen[k])
+            .collect();
+        let shots: Vec<refine::Shot> = picks
+            .par_iter()
+            .map(|&i| {
+                Ok(refine::Shot {
+                    camera: set.cameras[i].clone(),
+                    intrinsics: *set.intrinsics_of(i),
+                    image: image(i)?,
+                })
+            })
+            .collect::<Result<_>>()?;
+        progress("refining", 0, 1);
+        let fits = refine::refine_flat_parts(&mut mesh, occupancy.voxel_m, &shots);
+        progress("refining", 1, 1);
+        fits
+    } else {
+        Vec::new()
+    };
     let report = ReconstructReport {
         cameras_read: chosen.len(),
         cameras_used: views.len(),
@@ -407,6 +440,7 @@ pub fn reconstruct(
         collapsed_coverage,
         stray_triangles,
         directional: rule == carve::Rule::Directional,
+        flat_parts,
         seconds: [(t1 - t0).as_secs_f64(), carve_s, mesh_s],
     };
     Ok(Reconstruction {
@@ -415,6 +449,9 @@ pub fn reconstruct(
         report,
     })
 }
+
+/// Cameras read again for [`refine`].
+pub const REFINE_CAMERAS: usize = 64;
 
 /// One carving rule's result, meshed and checked.
 struct Attempt {

@@ -64,6 +64,9 @@ pub struct ProxyArgs {
     /// too little of the light (beams, small features; slow, large meshes: docs/proxy.md).
     #[arg(long)]
     pub directional: bool,
+    /// Leave flat parts where carving put them (no plane from luminance consistency).
+    #[arg(long)]
+    pub no_refine: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -80,6 +83,7 @@ impl ProxyArgs {
             grazing_deg: self.grazing_deg,
             thin_fraction: self.thin_fraction,
             directional_fallback: self.directional,
+            refine_flat: !self.no_refine,
             ..ReconstructOptions::default()
         }
     }
@@ -148,6 +152,14 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "collapsed_coverage": r.collapsed_coverage,
         "stray_triangles": r.stray_triangles,
         "directional": r.directional,
+        "flat_parts": r.flat_parts.iter().map(|f| json!({
+            "vertices": f.vertices,
+            "absorbed": f.absorbed,
+            "rms_mm": f.rms_m * 1e3,
+            "offset_mm": f.offset_m * 1e3,
+            "disagreement": f.cost,
+            "cameras": f.cameras,
+        })).collect::<Vec<_>>(),
         "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2]},
     })
 }

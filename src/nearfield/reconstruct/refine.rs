@@ -1,0 +1,365 @@
+//! Flat parts of a carved proxy moved onto the plane the cameras agree on (luminance consistency).
+//!
+//! Carving puts a flat emitter's surface only to within about a cell (its collapsed lens sits a
+//! fraction of a cell off, and its two sheets alternate); a view at a grazing angle turns a depth
+//! error δ into a sideways error δ / tan(elevation), so a star's sector edges are drawn doubled. The
+//! images themselves say where the surface is: at the true depth, every camera sees the same pattern
+//! at the same points of the surface.
+//!
+//! Promises:
+//! - Each connected part of the mesh is fitted by a plane (least squares: its vertices' centroid
+//!   and the covariance's smallest eigenvector), then fitted again to the vertices within
+//!   [`FLAT_MAX_CELLS`] cells of it, twice. A part is flat when at least [`MIN_INLIERS`] of its
+//!   vertices are such inliers, they lie within [`FLAT_RMS_CELLS`] cells RMS of their plane and
+//!   span at least [`MIN_SPAN_CELLS`] cells; only its inliers are moved. Other parts are left as
+//!   they are.
+//! - For a flat part, the plane is moved along its normal by the offset in ±[`SEARCH_CELLS`] cells
+//!   that minimises the luminance disagreement of the cameras that see it at least
+//!   [`MIN_ELEVATION_DEG`] above its plane: points of the part (its vertices on the plane, up to
+//!   [`MAX_POINTS`]) are projected into each camera, each camera's samples are divided by their
+//!   mean (so an emitter that is brighter in some directions is not penalised), and the cost is the
+//!   sum over points of the variance across cameras. A coarse scan (0.05 cell) is refined about its
+//!   best (0.005 cell). The part's vertices are then projected onto the moved plane.
+//! - The part's other vertices (a lens that carving could not take off the middle of a source wider
+//!   than the cameras' grazing rows reach under) are moved onto the plane where the cameras
+//!   disagree less there than where they are (their luminance over each camera's mean on the
+//!   plane); a feature standing off the plane, which the cameras see consistently where it is,
+//!   stays.
+//! - A part whose cameras are too few (fewer than 3 seeing it lit) or whose cost does not fall by
+//!   [`MIN_GAIN`] from the fitted plane keeps the fitted plane (still flattened).
+
+use glam::{DMat3, DVec3};
+use rayon::prelude::*;
+
+use super::mesh::{components, Mesh};
+use crate::nearfield::rayset::{Camera, Intrinsics, LuminanceImage};
+
+/// A part is flat within this RMS distance to its plane, in cells.
+pub const FLAT_RMS_CELLS: f64 = 0.6;
+/// ... and within this largest distance, in cells.
+pub const FLAT_MAX_CELLS: f64 = 1.5;
+/// ... and when at least this fraction of its vertices lies within [`FLAT_MAX_CELLS`] of the
+/// plane (the others, an unflattened blob or rim, stay where they are) ...
+pub const MIN_INLIERS: f64 = 0.7;
+/// ... and when its in-plane spread (standard deviation along its wider axis) is at least this
+/// many cells.
+pub const MIN_SPAN_CELLS: f64 = 3.0;
+/// The offset is searched within ± this many cells of the fitted plane.
+pub const SEARCH_CELLS: f64 = 2.0;
+/// Cameras at least this far above the plane (degrees) are consulted.
+pub const MIN_ELEVATION_DEG: f64 = 10.0;
+/// Points of a part sampled, at most.
+pub const MAX_POINTS: usize = 2000;
+/// The offset found is used when it lowers the disagreement by at least this fraction.
+pub const MIN_GAIN: f64 = 0.02;
+
+/// A camera the refinement reads: pose, intrinsics and image.
+#[derive(Debug, Clone)]
+pub struct Shot {
+    /// Pose (luminaire frame, m).
+    pub camera: Camera,
+    /// Intrinsics.
+    pub intrinsics: Intrinsics,
+    /// Luminance (cd/m²).
+    pub image: LuminanceImage,
+}
+
+/// What [`refine_flat_parts`] did to one flat part.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaneFit {
+    /// Vertices of the part within [`FLAT_MAX_CELLS`] of its plane, moved onto it.
+    pub vertices: usize,
+    /// Its other vertices moved onto the plane because the cameras agree better there.
+    pub absorbed: usize,
+    /// RMS distance of its vertices to the fitted plane before (m).
+    pub rms_m: f64,
+    /// Offset chosen along the plane's normal (m; 0 when the cameras did not decide).
+    pub offset_m: f64,
+    /// Disagreement at the fitted plane and at the chosen one (the second ≤ the first).
+    pub cost: [f64; 2],
+    /// Cameras consulted.
+    pub cameras: usize,
+}
+
+/// Flattens every flat part of `mesh` onto the plane its cameras agree on (see the module's
+/// promises); `voxel_m` is the carving's cell. Returns what was done for each flat part.
+pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<PlaneFit> {
+    let comp = components(mesh);
+    let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
+    for (v, c) in comp.iter().enumerate() {
+        parts.entry(*c).or_default().push(v);
+    }
+    // Vertices used by triangles only (an unused vertex is its own part).
+    let mut fits = Vec::new();
+    for part in parts.values() {
+        if part.len() < 16 {
+            continue;
+        }
+        let idx = part;
+        // Robust fit: the plane of all vertices, then of those within FLAT_MAX_CELLS of it (a
+        // part may carry an unflattened blob or rim, which stays as it is).
+        let all: Vec<DVec3> = idx.iter().map(|&i| mesh.vertices[i]).collect();
+        let Some((c0, n0, _)) = plane_of(&all) else { continue };
+        let near = |c: DVec3, n: DVec3| -> Vec<usize> {
+            (0..all.len())
+                .filter(|&k| (all[k] - c).dot(n).abs() <= FLAT_MAX_CELLS * voxel_m)
+                .collect()
+        };
+        let first = near(c0, n0);
+        let Some((c1, n1, _)) = plane_of(&first.iter().map(|&k| all[k]).collect::<Vec<_>>()) else {
+            continue;
+        };
+        let inliers = near(c1, n1);
+        if (inliers.len() as f64) < MIN_INLIERS * all.len() as f64 {
+            continue;
+        }
+        let idx: Vec<usize> = inliers.iter().map(|&k| idx[k]).collect();
+        let pts: Vec<DVec3> = inliers.iter().map(|&k| all[k]).collect();
+        let Some((centre, normal, spread)) = plane_of(&pts) else {
+            continue;
+        };
+        let dist: Vec<f64> = pts.iter().map(|p| (*p - centre).dot(normal)).collect();
+        let rms = (dist.iter().map(|d| d * d).sum::<f64>() / dist.len() as f64).sqrt();
+        if rms > FLAT_RMS_CELLS * voxel_m || spread < MIN_SPAN_CELLS * voxel_m {
+            continue;
+        }
+        let step = (pts.len() / MAX_POINTS).max(1);
+        let on_plane: Vec<DVec3> = pts
+            .iter()
+            .zip(&dist)
+            .step_by(step)
+            .map(|(p, d)| *p - *d * normal)
+            .collect();
+        let seeing: Vec<&Shot> = shots
+            .iter()
+            .filter(|s| {
+                let to = s.camera.position_m - centre;
+                (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
+            })
+            .collect();
+        let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing);
+        for (&i, d) in idx.iter().zip(&dist) {
+            mesh.vertices[i] -= (*d - offset_m) * normal;
+        }
+        // The part's other vertices (a lens carving could not take off the middle of a wide
+        // source) go onto the plane too where the cameras agree better there than where they are.
+        let mut absorbed = 0;
+        let plane_pts: Vec<DVec3> = on_plane.iter().map(|p| *p + offset_m * normal).collect();
+        if let Some((means, lit)) = camera_means(&plane_pts, &seeing) {
+            let is_inlier: std::collections::HashSet<usize> = idx.iter().copied().collect();
+            let outliers: Vec<usize> = part.iter().copied().filter(|i| !is_inlier.contains(i)).collect();
+            let onto: Vec<Option<DVec3>> = outliers
+                .par_iter()
+                .map(|&i| {
+                    let v = mesh.vertices[i];
+                    let flat = v - ((v - centre).dot(normal) - offset_m) * normal;
+                    let there = point_disagreement(flat, &seeing, &means, &lit)?;
+                    match point_disagreement(v, &seeing, &means, &lit) {
+                        Some(here) if here < there => None,
+                        _ => Some(flat),
+                    }
+                })
+                .collect();
+            for (&i, p) in outliers.iter().zip(onto) {
+                if let Some(p) = p {
+                    mesh.vertices[i] = p;
+                    absorbed += 1;
+                }
+            }
+        }
+        fits.push(PlaneFit {
+            absorbed,
+            vertices: idx.len(),
+            rms_m: rms,
+            offset_m,
+            cost,
+            cameras: seeing.len(),
+        });
+    }
+    fits
+}
+
+/// Centroid, unit normal (smallest principal axis) and the standard deviation along the largest
+/// axis of `pts`; `None` for a degenerate set.
+fn plane_of(pts: &[DVec3]) -> Option<(DVec3, DVec3, f64)> {
+    let n = pts.len() as f64;
+    let c = pts.iter().sum::<DVec3>() / n;
+    let mut cov = DMat3::ZERO;
+    for p in pts {
+        let d = *p - c;
+        cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    cov *= 1.0 / n;
+    let (values, vectors) = symmetric_eigen(cov);
+    let (mut lo, mut hi) = (0, 0);
+    for k in 1..3 {
+        if values[k] < values[lo] {
+            lo = k;
+        }
+        if values[k] > values[hi] {
+            hi = k;
+        }
+    }
+    let normal = vectors[lo].normalize_or_zero();
+    (normal != DVec3::ZERO && values[hi] > 0.0).then(|| (c, normal, values[hi].sqrt()))
+}
+
+/// Eigenvalues and unit eigenvectors of a symmetric 3 × 3 matrix: the values in closed form
+/// (Smith 1961), each vector as the longest cross product of two rows of M − λI.
+fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
+    let a = m.to_cols_array_2d();
+    let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let values = if p1 <= 1e-30 * (q * q).max(1e-300) {
+        [a[0][0], a[1][1], a[2][2]]
+    } else {
+        let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * p1;
+        let p = (p2 / 6.0).sqrt();
+        let b = (m - DMat3::from_diagonal(DVec3::splat(q))) * (1.0 / p);
+        let r = (b.determinant() / 2.0).clamp(-1.0, 1.0);
+        let phi = r.acos() / 3.0;
+        let big = q + 2.0 * p * phi.cos();
+        let small = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+        [big, 3.0 * q - big - small, small]
+    };
+    let vector = |l: f64| -> DVec3 {
+        let r = m - DMat3::from_diagonal(DVec3::splat(l));
+        let (r0, r1, r2) = (r.row(0), r.row(1), r.row(2));
+        let c = [r0.cross(r1), r0.cross(r2), r1.cross(r2)];
+        let best = c
+            .iter()
+            .copied()
+            .max_by(|x, y| x.length_squared().total_cmp(&y.length_squared()));
+        match best {
+            Some(v) if v.length_squared() > 1e-300 => v.normalize(),
+            // A repeated value: any vector orthogonal to the rows that are not zero.
+            _ => [r0, r1, r2]
+                .into_iter()
+                .find(|v| v.length_squared() > 1e-300)
+                .map_or(DVec3::X, |v| v.any_orthonormal_vector()),
+        }
+    };
+    (values, values.map(vector))
+}
+
+/// Bilinear luminance at pixel coordinates (u, v) (pixel centres at +0.5), `None` outside.
+fn sample(img: &LuminanceImage, u: f64, v: f64) -> Option<f64> {
+    let (x, y) = (u - 0.5, v - 0.5);
+    if !(x >= 0.0 && y >= 0.0 && x <= f64::from(img.width) - 1.0 && y <= f64::from(img.height) - 1.0) {
+        return None;
+    }
+    let (x0, y0) = (x.floor() as u32, y.floor() as u32);
+    let (x1, y1) = ((x0 + 1).min(img.width - 1), (y0 + 1).min(img.height - 1));
+    let (fx, fy) = (x - f64::from(x0), y - f64::from(y0));
+    let g = |x: u32, y: u32| f64::from(img.get(x, y));
+    Some((1.0 - fy) * ((1.0 - fx) * g(x0, y0) + fx * g(x1, y0)) + fy * ((1.0 - fx) * g(x0, y1) + fx * g(x1, y1)))
+}
+
+/// Camera `s`'s luminance at point `p` (luminaire frame), `None` outside its image.
+fn seen(s: &Shot, p: DVec3) -> Option<f64> {
+    let uv = s.intrinsics.project(s.camera.to_camera(p - s.camera.position_m))?;
+    sample(&s.image, uv.x, uv.y)
+}
+
+/// Each camera's mean luminance over `pts`, and which cameras see light there (a mean above 10⁻³
+/// of the brightest); `None` when fewer than 3 do.
+fn camera_means(pts: &[DVec3], shots: &[&Shot]) -> Option<(Vec<f64>, Vec<usize>)> {
+    let means: Vec<f64> = shots
+        .par_iter()
+        .map(|s| {
+            let (sum, k) = pts
+                .iter()
+                .filter_map(|p| seen(s, *p))
+                .fold((0.0, 0usize), |(a, k), v| (a + v, k + 1));
+            if k == 0 {
+                0.0
+            } else {
+                sum / k as f64
+            }
+        })
+        .collect();
+    let brightest = means.iter().copied().fold(0.0, f64::max);
+    let lit: Vec<usize> = (0..shots.len()).filter(|&j| means[j] > 1e-3 * brightest).collect();
+    (lit.len() >= 3 && brightest > 0.0).then_some((means, lit))
+}
+
+/// The variance, across the cameras `lit`, of their luminance at `p` over their mean; `None` when
+/// fewer than 3 of them see `p`.
+fn point_disagreement(p: DVec3, shots: &[&Shot], means: &[f64], lit: &[usize]) -> Option<f64> {
+    let vals: Vec<f64> = lit
+        .iter()
+        .filter_map(|&j| seen(shots[j], p).map(|v| v / means[j]))
+        .collect();
+    if vals.len() < 3 {
+        return None;
+    }
+    let m = vals.iter().sum::<f64>() / vals.len() as f64;
+    Some(vals.iter().map(|v| (v - m) * (v - m)).sum::<f64>() / vals.len() as f64)
+}
+
+/// The cameras' disagreement about the points `pts` moved by `dz` along `normal`: Σ over points
+/// (seen by at least 3 cameras) of the variance across cameras of the luminance over that camera's
+/// mean; `None` when fewer than 3 cameras see light.
+fn disagreement(pts: &[DVec3], normal: DVec3, dz: f64, shots: &[&Shot]) -> Option<f64> {
+    let moved: Vec<DVec3> = pts.iter().map(|p| *p + dz * normal).collect();
+    let (means, lit) = camera_means(&moved, shots)?;
+    Some(
+        moved
+            .par_iter()
+            .filter_map(|p| point_disagreement(*p, shots, &means, &lit))
+            .sum(),
+    )
+}
+
+/// The offset (m) in ±[`SEARCH_CELLS`] cells with the least disagreement, and the disagreement at 0
+/// and there; 0 when the cameras do not decide (see the module's promises).
+fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot]) -> (f64, [f64; 2]) {
+    let Some(at_zero) = disagreement(pts, normal, 0.0, shots) else {
+        return (0.0, [0.0, 0.0]);
+    };
+    let mut best = (0.0, at_zero);
+    let coarse = 0.05 * voxel_m;
+    let n = (SEARCH_CELLS * voxel_m / coarse).round() as i64;
+    for k in -n..=n {
+        let dz = k as f64 * coarse;
+        if let Some(c) = disagreement(pts, normal, dz, shots) {
+            if c < best.1 {
+                best = (dz, c);
+            }
+        }
+    }
+    let fine = 0.005 * voxel_m;
+    let centre = best.0;
+    for k in -10..=10 {
+        let dz = centre + k as f64 * fine;
+        if let Some(c) = disagreement(pts, normal, dz, shots) {
+            if c < best.1 {
+                best = (dz, c);
+            }
+        }
+    }
+    if best.1 > (1.0 - MIN_GAIN) * at_zero {
+        return (0.0, [at_zero, at_zero]);
+    }
+    (best.0, [at_zero, best.1])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eigen_of_a_rotated_diagonal_matrix() {
+        let r = DMat3::from_rotation_y(0.3) * DMat3::from_rotation_x(0.7);
+        let m = r * DMat3::from_diagonal(DVec3::new(1.0, 4.0, 9.0)) * r.transpose();
+        let (values, vectors) = symmetric_eigen(m);
+        for k in 0..3 {
+            let mv = m * vectors[k];
+            assert!((mv - values[k] * vectors[k]).length() < 1e-9, "{k}: {values:?}");
+            assert!((vectors[k].length() - 1.0).abs() < 1e-9);
+        }
+        let mut s = values;
+        s.sort_by(f64::total_cmp);
+        assert!((s[0] - 1.0).abs() < 1e-9 && (s[2] - 9.0).abs() < 1e-9, "{s:?}");
+    }
+}
