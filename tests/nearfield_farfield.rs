@@ -8,20 +8,9 @@
 use glam::DVec3;
 use lumiview::nearfield::farfield::{FarField, FarFieldOptions};
 use lumiview::nearfield::layout::Layout;
+use lumiview::nearfield::raykde::bandwidth::fibonacci;
 use lumiview::nearfield::synth::scan::{synth_scan, SynthOptions};
 use lumiview::nearfield::synth::{luminaire, Luminaire};
-
-fn fibonacci(n: usize) -> Vec<DVec3> {
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    (0..n)
-        .map(|i| {
-            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
-            let r = (1.0 - z * z).max(0.0).sqrt();
-            let a = golden * i as f64;
-            DVec3::new(r * a.cos(), r * a.sin(), z)
-        })
-        .collect()
-}
 
 fn angles(e: DVec3) -> (f64, f64) {
     let g = (-e.z).clamp(-1.0, 1.0).acos().to_degrees();
@@ -31,6 +20,22 @@ fn angles(e: DVec3) -> (f64, f64) {
 fn percentile(mut v: Vec<f64>, p: f64) -> f64 {
     v.sort_by(f64::total_cmp);
     v[((v.len() - 1) as f64 * p).round() as usize]
+}
+
+impl Row {
+    /// The row of the docs' table.
+    fn print(&self) {
+        println!(
+            "| {} | {:.2} | {:+.2} % | {:.2} % / {:.2} % | {:.2} % / {:.2} % |",
+            self.name,
+            self.sigma_deg,
+            100.0 * self.flux_err,
+            100.0 * self.median_kernel,
+            100.0 * self.p95_kernel,
+            100.0 * self.median_raw,
+            100.0 * self.p95_raw
+        );
+    }
 }
 
 struct Row {
@@ -126,16 +131,7 @@ fn scans_far_fields_match_the_closed_forms() {
     let mut failures = Vec::new();
     for n in held.iter().chain(&shown) {
         let r = measure(n, Layout::Fibonacci { count: cams }, px);
-        println!(
-            "| {} | {:.2} | {:+.2} % | {:.2} % / {:.2} % | {:.2} % / {:.2} % |",
-            r.name,
-            r.sigma_deg,
-            100.0 * r.flux_err,
-            100.0 * r.median_kernel,
-            100.0 * r.p95_kernel,
-            100.0 * r.median_raw,
-            100.0 * r.p95_raw
-        );
+        r.print();
         if held.contains(n) && (r.flux_err.abs() > 0.01 || r.median_kernel > 0.015 || r.p95_kernel > 0.07) {
             failures.push(r.name);
         }
@@ -150,16 +146,7 @@ fn scans_far_fields_match_the_closed_forms() {
             jitter_deg: 0.05,
         };
         let r = measure(n, layout, px);
-        println!(
-            "| {} | {:.2} | {:+.2} % | {:.2} % / {:.2} % | {:.2} % / {:.2} % |",
-            r.name,
-            r.sigma_deg,
-            100.0 * r.flux_err,
-            100.0 * r.median_kernel,
-            100.0 * r.p95_kernel,
-            100.0 * r.median_raw,
-            100.0 * r.p95_raw
-        );
+        r.print();
         if r.flux_err.abs() > 0.01 || r.median_kernel > 0.015 || r.p95_kernel > 0.1 {
             failures.push(r.name);
         }

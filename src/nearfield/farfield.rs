@@ -38,6 +38,7 @@ use rayon::prelude::*;
 
 use super::binning::NearestDirection;
 use super::error::{NearfieldError, Result};
+use super::raykde::bandwidth::fibonacci;
 use super::rayset::{ImageSource, RayImageSet};
 use crate::photometry::{load_from_text, LoadOptions, Photometry};
 
@@ -130,6 +131,47 @@ fn direction(c_deg: f64, g_deg: f64) -> DVec3 {
     DVec3::new(g.sin() * c.cos(), g.sin() * c.sin(), -g.cos())
 }
 
+/// The normalised von Mises–Fisher kernel K(e, s) = norm · exp(κ (e·s − 1)), cut at `reach` (rad).
+struct Kernel {
+    kappa: f64,
+    norm: f64,
+    reach: f64,
+}
+
+impl Kernel {
+    /// Σ w · K(d, s) over the weighted directions `items` (s, w) at every node d of the web,
+    /// one row of `c_deg` values per γ.
+    fn web(&self, items: &[(DVec3, f64)], c_deg: &[f64], gamma_deg: &[f64]) -> Vec<Vec<f64>> {
+        let cos_reach = self.reach.cos();
+        gamma_deg
+            .par_iter()
+            .map(|&g| {
+                // Only items within reach of the row in γ can reach one of its nodes.
+                let near: Vec<&(DVec3, f64)> = items
+                    .iter()
+                    .filter(|(s, _)| ((-s.z).clamp(-1.0, 1.0).acos().to_degrees() - g).abs().to_radians() <= self.reach)
+                    .collect();
+                c_deg
+                    .iter()
+                    .map(|&c| {
+                        let d = direction(c, g);
+                        near.iter()
+                            .map(|(s, w)| {
+                                let cos = d.dot(*s);
+                                if cos < cos_reach {
+                                    0.0
+                                } else {
+                                    w * self.norm * (self.kappa * (cos - 1.0)).exp()
+                                }
+                            })
+                            .sum()
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+}
+
 /// Indices of at most `max` cameras spread over the sphere: the camera nearest each of `max`
 /// Fibonacci directions, without repeats, in camera order.
 fn camera_subset(dirs: &[DVec3], max: usize) -> Vec<usize> {
@@ -137,13 +179,9 @@ fn camera_subset(dirs: &[DVec3], max: usize) -> Vec<usize> {
         return (0..dirs.len()).collect();
     }
     let lookup = NearestDirection::new(dirs);
-    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
     let mut keep = vec![false; dirs.len()];
-    for i in 0..max {
-        let z = 1.0 - (2.0 * i as f64 + 1.0) / max as f64;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let a = golden * i as f64;
-        if let Some(j) = lookup.nearest(DVec3::new(r * a.cos(), r * a.sin(), z)) {
+    for q in fibonacci(max) {
+        if let Some(j) = lookup.nearest(q) {
             keep[j] = true;
         }
     }
@@ -299,74 +337,26 @@ impl FarField {
         let c_deg: Vec<f64> = (0..=nc).map(|i| i as f64 * step).collect();
         let gamma_deg: Vec<f64> = (0..=ng).map(|i| i as f64 * step).collect();
         let kappa = 1.0 / (sigma * sigma);
-        let norm = kappa / (2.0 * std::f64::consts::PI * (1.0 - (-2.0 * kappa).exp()));
-        let reach = 4.0 * sigma;
-        let cos_reach = reach.cos();
-        let cells: Vec<(DVec3, f64, f64)> = hist
+        let kernel = Kernel {
+            kappa,
+            norm: kappa / (2.0 * std::f64::consts::PI * (1.0 - (-2.0 * kappa).exp())),
+            reach: 4.0 * sigma,
+        };
+        let cells: Vec<(DVec3, f64)> = hist
             .flux
             .iter()
             .enumerate()
             .filter(|(_, f)| **f > 0.0)
             .map(|(i, f)| {
                 let (c, g) = hist.centre(i);
-                (direction(c, g), g, *f)
+                (direction(c, g), *f)
             })
             .collect();
-        // Per γ row of the web: every cell within reach of some node of the row, then each node.
-        let rows: Vec<Vec<f64>> = gamma_deg
-            .par_iter()
-            .map(|&g| {
-                let near: Vec<&(DVec3, f64, f64)> = cells
-                    .iter()
-                    .filter(|(_, gc, _)| (gc - g).abs().to_radians() <= reach)
-                    .collect();
-                c_deg
-                    .iter()
-                    .map(|&c| {
-                        let d = direction(c, g);
-                        near.iter()
-                            .map(|(dc, _, f)| {
-                                let cos = d.dot(*dc);
-                                if cos < cos_reach {
-                                    0.0
-                                } else {
-                                    f * norm * (kappa * (cos - 1.0)).exp()
-                                }
-                            })
-                            .sum()
-                    })
-                    .collect()
-            })
-            .collect();
+        let rows = kernel.web(&cells, &c_deg, &gamma_deg);
         // The cameras' own quadrature of the kernel, D(e) = Σ ω_i K(e, s_i) (1 for a perfect one):
         // dividing by it removes the bias of uneven layouts (a meridian layout's pole).
-        let density: Vec<Vec<f64>> = gamma_deg
-            .par_iter()
-            .map(|&g| {
-                let near: Vec<(DVec3, f64)> = dirs
-                    .iter()
-                    .zip(&omega)
-                    .filter(|(s, _)| ((-s.z).clamp(-1.0, 1.0).acos().to_degrees() - g).abs().to_radians() <= reach)
-                    .map(|(s, w)| (*s, *w))
-                    .collect();
-                c_deg
-                    .iter()
-                    .map(|&c| {
-                        let d = direction(c, g);
-                        near.iter()
-                            .map(|(s, w)| {
-                                let cos = d.dot(*s);
-                                if cos < cos_reach {
-                                    0.0
-                                } else {
-                                    w * norm * (kappa * (cos - 1.0)).exp()
-                                }
-                            })
-                            .sum()
-                    })
-                    .collect()
-            })
-            .collect();
+        let cameras: Vec<(DVec3, f64)> = dirs.iter().copied().zip(omega.iter().copied()).collect();
+        let density = kernel.web(&cameras, &c_deg, &gamma_deg);
         let candela: Vec<Vec<f64>> = (0..c_deg.len())
             .map(|ci| {
                 rows.iter()
@@ -380,15 +370,9 @@ impl FarField {
         // Coverage: directions within 2 √(median cell) of some camera.
         let near_enough = (2.0 * median.sqrt()).cos();
         let samples = 20_000;
-        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-        let covered = (0..samples)
-            .filter(|&i| {
-                let z = 1.0 - (2.0 * i as f64 + 1.0) / samples as f64;
-                let r = (1.0 - z * z).max(0.0).sqrt();
-                let a = golden * i as f64;
-                let q = DVec3::new(r * a.cos(), r * a.sin(), z);
-                lookup.nearest(q).is_some_and(|j| dirs[j].dot(q) >= near_enough)
-            })
+        let covered = fibonacci(samples)
+            .into_iter()
+            .filter(|q| lookup.nearest(*q).is_some_and(|j| dirs[j].dot(*q) >= near_enough))
             .count();
         let covered_fraction = covered as f64 / samples as f64;
         if covered_fraction < 0.99 {
