@@ -698,7 +698,7 @@ lumi_status lumi_luminaire_cameras(const struct lumi_context *ctx,
 // luminance is then the mean over its measured luminous extent.
 //
 // Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a scan
-// whose images hold no light.
+// whose images cannot be read.
 //
 // # Safety
 // `ctx` is a live context; non-NULL out-pointers writable.
@@ -806,8 +806,8 @@ lumi_status lumi_scene_load(struct lumi_context *ctx, const char *path, lumi_sce
 lumi_status lumi_scene_destroy(struct lumi_context *ctx, lumi_scene scene);
 
 // Chooses the scene `lumi_render` draws: from the next render on, every frame draws `scene` from
-// the camera, lit by every far-field instance of the context (direct light with shadow maps,
-// luminance L = ρ·E/π in cd/m²), before the luminaires' own appearance, in the same depth test.
+// the camera, lit by every instance of the context (scans by their far field; direct light with
+// shadow maps, luminance L = ρ·E/π in cd/m²), before the luminaires' own appearance, in the same depth test.
 // `scene` 0 draws none. The scene is uploaded to the GPU here (setting the scene already drawn
 // does nothing); on an error the context draws what it drew before.
 //
@@ -819,7 +819,8 @@ lumi_status lumi_scene_destroy(struct lumi_context *ctx, lumi_scene scene);
 //
 // # Safety
 // `ctx` is a live context.
-lumi_status lumi_context_set_scene(struct lumi_context *ctx, lumi_scene scene);
+lumi_status lumi_context_set_scene(struct lumi_context *ctx,
+                                   lumi_scene scene);
 
 // Sets how the drawn scene is lit (`lumi_scene_settings`; kept by the context, also while no scene
 // is set). On an error nothing changes.
@@ -845,7 +846,8 @@ lumi_status lumi_context_set_scene_settings(struct lumi_context *ctx,
 // the CPU reference path tracer (docs/scene-lighting.md, "C API"): the direct term from shadow
 // rays to points on each luminous opening, and with `LUMI_ILLUMINANCE_TOTAL` inter-reflection
 // between the scene's Lambertian surfaces by path tracing (every bounce: Russian roulette, capped
-// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render` draws.
+// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render`
+// draws.
 //
 // - `points_m`: `3 × count` floats, x, y, z of each point in scene metres (glTF axes, +Y up).
 // - `normals`: `3 × count` floats, the normal of each point's receiving side (any non-zero

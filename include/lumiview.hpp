@@ -549,8 +549,8 @@ public:
     explicit operator bool() const noexcept { return !h_.empty(); }
 
     /// Illuminance (lux) at points of the scene (metres, glTF axes, +Y up) on the side each normal
-    /// faces, from every far-field instance of the context, by the CPU reference path tracer;
-    /// `opts` NULL for `lumi_illuminance_options_default()` (direct light plus inter-reflection).
+    /// faces, from every instance of the context (scans by their far field), by the CPU reference
+    /// path tracer; `opts` NULL for `lumi_illuminance_options_default()` (direct light plus inter-reflection).
     /// `points_m` and `normals` must have the same length, at least 1 (else
     /// `LUMI_STATUS_INVALID_ARGUMENT`, without calling C). Wraps `lumi_scene_illuminance`.
     illuminance_result illuminance(const std::vector<std::array<float, 3>> &points_m,
@@ -660,7 +660,7 @@ public:
         return scene(ctx_, out);
     }
 
-    /// Draws `s` in every later render, lit by this context's far-field instances. Wraps
+    /// Draws `s` in every later render, lit by this context's instances. Wraps
     /// `lumi_context_set_scene`; `s` must come from this context.
     void set_scene(const scene &s) {
         lumi_context *ctx = live("lumi::context::set_scene");

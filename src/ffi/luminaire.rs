@@ -564,7 +564,7 @@ pub unsafe extern "C" fn lumi_luminaire_cameras(
 /// luminance is then the mean over its measured luminous extent.
 ///
 /// Errors: `LUMI_STATUS_INVALID_ARGUMENT` for angles out of range, a stale handle, or a scan
-/// whose images hold no light.
+/// whose images cannot be read.
 ///
 /// # Safety
 /// `ctx` is a live context; non-NULL out-pointers writable.

@@ -1,5 +1,5 @@
 //! Scenes: a glTF 2.0 scene loaded into a context, the one `lumi_render` draws lit by the context's
-//! far-field instances, its lighting settings, and the illuminance at host-given points computed by
+//! instances, its lighting settings, and the illuminance at host-given points computed by
 //! the CPU reference path tracer (`scene::Tracer`).
 //!
 //! Promises:
@@ -11,8 +11,8 @@
 //!   destroying it stops drawing it.
 //! - `lumi_scene_illuminance` lights the scene with every instance of the context at the time of
 //!   the call, as the GPU pass does: a photometric file by its web, a near-field scan by its far
-//!   field (`nearfield::farfield`, estimated from its images on first use). Out-parameters are written only on
-//!   success; every argument is checked before any work.
+//!   field (`nearfield::farfield`, estimated from its images on first use). Out-parameters are
+//!   written only on success; every argument is checked before any work.
 
 use std::ffi::c_char;
 use std::sync::Arc;
@@ -267,8 +267,8 @@ pub unsafe extern "C" fn lumi_scene_destroy(ctx: *mut lumi_context, scene: lumi_
 }
 
 /// Chooses the scene `lumi_render` draws: from the next render on, every frame draws `scene` from
-/// the camera, lit by every far-field instance of the context (direct light with shadow maps,
-/// luminance L = ρ·E/π in cd/m²), before the luminaires' own appearance, in the same depth test.
+/// the camera, lit by every instance of the context (scans by their far field; direct light with
+/// shadow maps, luminance L = ρ·E/π in cd/m²), before the luminaires' own appearance, in the same depth test.
 /// `scene` 0 draws none. The scene is uploaded to the GPU here (setting the scene already drawn
 /// does nothing); on an error the context draws what it drew before.
 ///
@@ -420,7 +420,8 @@ unsafe fn surface_points(
 /// the CPU reference path tracer (docs/scene-lighting.md, "C API"): the direct term from shadow
 /// rays to points on each luminous opening, and with `LUMI_ILLUMINANCE_TOTAL` inter-reflection
 /// between the scene's Lambertian surfaces by path tracing (every bounce: Russian roulette, capped
-/// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render` draws.
+/// at 64). With no instance every point gets 0 lx. The scene need not be the one `lumi_render`
+/// draws.
 ///
 /// - `points_m`: `3 × count` floats, x, y, z of each point in scene metres (glTF axes, +Y up).
 /// - `normals`: `3 × count` floats, the normal of each point's receiving side (any non-zero

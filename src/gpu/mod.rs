@@ -8,8 +8,8 @@
 //! - [`farfield`]: the far-field appearance pass and overlays.
 //! - [`nearfield`]: the near-field appearance pass (scans), with [`residency`] of their tiles; the
 //!   CPU geometry it draws and culls with is `nearfield::select` (`lit_bound`, `view`).
-//! - [`scene`]: the scene lighting pass: a glTF scene lit by every instance, scans by their far field (direct
-//!   light, cube shadow maps in an atlas, tiled light lists), in cd/m².
+//! - [`scene`]: the scene lighting pass: a glTF scene lit by every instance, scans by their far
+//!   field (direct light, cube shadow maps in an atlas, tiled light lists), in cd/m².
 //! - [`shaders`]: the WGSL each pass compiles (generated constants, `shaders/common/`, the pass)
 //!   and the CPU tests (naga) that hold the shader contract.
 //! - [`slots`]: per-draw records at dynamic offsets.

@@ -224,7 +224,8 @@ impl Renderer {
     }
 
     /// Loads a scene for the scene lighting pass (replacing any earlier one): from then on every
-    /// frame draws it lit by every instance (a scan by its far field), before the luminaires' own appearance.
+    /// frame draws it lit by every instance (a scan by its far field), before the luminaires' own
+    /// appearance.
     pub fn set_scene(&mut self, scene: &crate::scene::Scene) -> Result<(), GpuError> {
         self.scene.set_scene(&self.ctx, Arc::new(scene.clone()), None)
     }
@@ -260,8 +261,7 @@ impl Renderer {
     /// near-field scan's far field, [`NearfieldLuminaire::far_field`], estimated on first use). Empty
     /// without a scene.
     ///
-    /// Errors: a scan whose far field cannot be estimated (its images cannot be read, or hold no
-    /// light).
+    /// Errors: a scan whose far field cannot be estimated (its images cannot be read).
     pub fn scene_lights(&self) -> Result<Vec<(Arc<Photometry>, Mat4)>, GpuError> {
         if !self.scene.has_scene() {
             return Ok(Vec::new());

@@ -98,10 +98,11 @@ impl NearfieldLuminaire {
     }
 
     /// The scan's far-field intensity as photometry ([`FarField::estimate`] over the pack's
-    /// images, default options), estimated on the first call and kept: what lights a scene. Its
-    /// warnings (sparse coverage) go to the context's log.
+    /// images, default options), estimated on the first call and kept (an error too): what lights
+    /// a scene. Its warnings (sparse coverage, no light at all) go to the context's log.
     ///
-    /// Errors: the pack's images cannot be read, or hold no light (`luminaire`, naming the pack).
+    /// Errors: the pack's images cannot be read (a pack that became unreadable or corrupt;
+    /// `luminaire`, naming the pack).
     pub fn far_field(&self, ctx: &GpuContext) -> Result<Arc<Photometry>, GpuError> {
         self.far_field
             .get_or_init(|| {

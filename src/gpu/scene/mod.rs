@@ -14,9 +14,10 @@
 //!   colour factor and UVs per vertex, and the base-colour textures in one sRGB atlas
 //!   ([`TextureAtlas`]) sampled per fragment as `scene::texture` samples them (for |uv| ≤ 2²⁰).
 //! - Each frame lights with every instance ([`Pass::prepare`]'s instances: photometry and model
-//!   matrix; a scan lights as its far field from its luminous extent). Direct illuminance is the reference's direct estimator
-//!   (`scene::reference`) with fixed stratified points on the opening instead of random ones and
-//!   shadow-map visibility instead of shadow rays: shaders/scene/lighting.wgsl says how.
+//!   matrix; a scan lights as its far field from its luminous extent). Direct illuminance is the
+//!   reference's direct estimator (`scene::reference`) with fixed stratified points on the opening
+//!   instead of random ones and shadow-map visibility instead of shadow rays:
+//!   shaders/scene/lighting.wgsl says how.
 //! - Shadow maps ([`shadows`]) are rendered inside `prepare`, in their own render pass submitted
 //!   before the frame's (queue order makes them visible to it). A luminaire's faces are rendered
 //!   again when its centre moved, at most [`SceneSettings::shadow_updates_per_frame`] luminaires a
