@@ -401,11 +401,14 @@ pub fn reconstruct(
         stray_triangles,
     } = best;
     // Flat parts onto the plane the images agree on, from up to REFINE_CAMERAS cameras spread over
-    // the sphere (read again: the masks kept no luminance).
+    // the sphere (read again: the masks kept no luminance), within REFINE_PIXELS.
     let flat_parts = if opts.refine_flat && !mesh.triangles.is_empty() {
+        // At most REFINE_PIXELS pixels held (a full-size image is 1.24 M), at least 16 cameras.
+        let px = set.intrinsics.pixel_count().max(1);
+        let count = (REFINE_PIXELS / px).clamp(16, REFINE_CAMERAS);
         let picks: Vec<usize> = carve::spread_order(chosen.len())
             .into_iter()
-            .take(REFINE_CAMERAS)
+            .take(count)
             .map(|k| chosen[k])
             .collect();
         let shots: Vec<refine::Shot> = picks
@@ -450,8 +453,11 @@ pub fn reconstruct(
     })
 }
 
-/// Cameras read again for [`refine`].
+/// Cameras read again for [`refine`], at most ...
 pub const REFINE_CAMERAS: usize = 64;
+/// ... and as many as hold at most this many pixels together (128 MiB of f32; 27 full-size
+/// 1216 × 1021 images), but at least 16.
+pub const REFINE_PIXELS: usize = 1 << 25;
 
 /// One carving rule's result, meshed and checked.
 struct Attempt {
