@@ -40,7 +40,7 @@ fn tmp(name: &str) -> PathBuf {
 /// diameter or two capture-pixel footprints), the flat parts collapsed onto their middle and put on
 /// the plane the images agree on, and nearly all lit pixels explained, at rigo:300 (the default
 /// layout of `lumiview proxy --synth`), 128 × 128 px. Measured (this set-up): disc mean 0.13 mm, p95
-/// 0.14 mm (limit 5.57); two-planes 0.26 / 0.95 mm (limit 6.66); star-panel 0.09 / 0.07 mm (limit
+/// 0.14 mm (limit 5.57); two-planes 0.26 / 0.90 mm (limit 6.66); star-panel 0.07 / 0.07 mm (limit
 /// 8.92); coverage 0.995–1.000. Before the flat-part step (docs/proxy.md, step 5): disc 0.52 / 1.27
 /// mm, two-planes 0.69 / 1.96 mm.
 #[test]
@@ -92,7 +92,7 @@ fn reconstruction_is_near_the_true_proxy() {
 }
 
 /// The known limit at a sparse layout (docs/proxy.md): at rigo:150 the disc keeps part of a
-/// floating lens bottom in front of it (measured mean 0.87 mm, max 17.9 mm; before the flat-part
+/// floating lens bottom in front of it (measured mean 0.82 mm, max 16.8 mm; before the flat-part
 /// step 1.60 mm and 25 mm: the uniform disc gives the luminance test little to tell the lens from
 /// the disc by). Held so that it cannot quietly get worse, and so that a fix shows here.
 #[test]

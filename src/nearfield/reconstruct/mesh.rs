@@ -49,7 +49,7 @@ impl Mesh {
         m
     }
 
-    fn corners(&self, t: &[u32; 3]) -> [DVec3; 3] {
+    pub(crate) fn corners(&self, t: &[u32; 3]) -> [DVec3; 3] {
         t.map(|i| self.vertices[i as usize])
     }
 }

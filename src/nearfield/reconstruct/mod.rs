@@ -422,7 +422,7 @@ pub fn reconstruct(
             })
             .collect::<Result<_>>()?;
         progress("refining", 0, 1);
-        let fits = refine::refine_flat_parts(&mut mesh, occupancy.voxel_m, &shots);
+        let fits = refine::refine_flat_parts(&mut mesh, occupancy.voxel_m.max(footprint), &shots);
         progress("refining", 1, 1);
         fits
     } else {

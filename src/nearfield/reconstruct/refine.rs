@@ -25,6 +25,13 @@
 //!   disagree less there than where they are (their luminance over each camera's mean on the
 //!   plane); a feature standing off the plane, which the cameras see consistently where it is,
 //!   stays.
+//! - Then its outline (the rim where the part's two collapsed sheets fold onto each other) goes to
+//!   where the light falls to half its inside value, as the cameras above 30° see it along each
+//!   rim vertex's outward in-plane direction (`snap_outline`): carving leaves the rim about a cell
+//!   out, and a capture pixel half on the source is half lit, so that rim drew light where there
+//!   is none.
+//! - Distances are in units of the larger of the carving's cell and the capture pixel's footprint
+//!   at the centre (`unit_m`).
 //! - A part whose cameras are too few (fewer than 3 seeing it lit) or whose cost does not fall by
 //!   [`MIN_GAIN`] from the fitted plane keeps the fitted plane (still flattened).
 
@@ -40,7 +47,7 @@ pub const FLAT_RMS_CELLS: f64 = 0.6;
 pub const FLAT_MAX_CELLS: f64 = 1.5;
 /// ... and when at least this fraction of its vertices lies within [`FLAT_MAX_CELLS`] of the
 /// plane (the others, an unflattened blob or rim, stay where they are) ...
-pub const MIN_INLIERS: f64 = 0.7;
+pub const MIN_INLIERS: f64 = 0.5;
 /// ... and when its in-plane spread (standard deviation along its wider axis) is at least this
 /// many cells.
 pub const MIN_SPAN_CELLS: f64 = 3.0;
@@ -52,6 +59,10 @@ pub const MIN_ELEVATION_DEG: f64 = 10.0;
 pub const MAX_POINTS: usize = 2000;
 /// The offset found is used when it lowers the disagreement by at least this fraction.
 pub const MIN_GAIN: f64 = 0.02;
+
+/// An outline is snapped only where the light 3 units outside it is below this fraction of the
+/// light inside (an edge against darkness).
+pub const DARK_BEYOND: f64 = 0.1;
 
 /// A camera the refinement reads: pose, intrinsics and image.
 #[derive(Debug, Clone)]
@@ -81,8 +92,9 @@ pub struct PlaneFit {
     pub cameras: usize,
 }
 
-/// Flattens every flat part of `mesh` onto the plane its cameras agree on (see the module's
-/// promises); `voxel_m` is the carving's cell. Returns what was done for each flat part.
+/// Flattens every flat part of `mesh` onto the plane its cameras agree on and snaps its outline
+/// (see the module's promises); `voxel_m` is the unit: the larger of the carving's cell and the
+/// capture pixel's footprint. Returns what was done for each flat part.
 pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<PlaneFit> {
     let comp = components(mesh);
     let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
@@ -166,6 +178,12 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
                     absorbed += 1;
                 }
             }
+            let on: std::collections::HashSet<usize> = part
+                .iter()
+                .copied()
+                .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
+                .collect();
+            snap_outline(mesh, &on, normal, voxel_m, &seeing, &means, &lit);
         }
         fits.push(PlaneFit {
             absorbed,
@@ -177,6 +195,112 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
         });
     }
     fits
+}
+
+/// Moves the outline of a flattened part (the vertices `on` its plane, normal `normal`) to where
+/// the cameras that look at the plane from above 30° see its light fall to half: the rim where the
+/// part's two collapsed sheets fold onto each other (an edge between two of its triangles facing
+/// opposite ways) is right to about a cell, and a capture pixel half on the source is half lit, so
+/// an outline a cell too far out draws that half-lit rim as light. Each fold vertex looks along
+/// its outward in-plane direction, from 3 units inside to 3 outside, at the mean over those
+/// cameras of their luminance over their mean; where the profile 3 units out is dark (below
+/// [`DARK_BEYOND`] of its largest value inside), it moves to where the profile first falls below
+/// half that value.
+fn snap_outline(
+    mesh: &mut Mesh,
+    on: &std::collections::HashSet<usize>,
+    normal: DVec3,
+    voxel_m: f64,
+    shots: &[&Shot],
+    means: &[f64],
+    lit: &[usize],
+) {
+    use std::collections::HashMap;
+    let steep: Vec<usize> = lit
+        .iter()
+        .copied()
+        .filter(|&j| {
+            let to = shots[j].camera.position_m - mesh.vertices[*on.iter().next().unwrap_or(&0)];
+            (to.dot(normal) / to.length()).abs() >= 30f64.to_radians().sin()
+        })
+        .collect();
+    if steep.len() < 3 {
+        return;
+    }
+    // Edges of the part's triangles: (facing sign, third vertex) per triangle.
+    let mut edges: HashMap<(u32, u32), Vec<(f64, u32)>> = HashMap::new();
+    for t in &mesh.triangles {
+        if !t.iter().all(|&i| on.contains(&(i as usize))) {
+            continue;
+        }
+        let [a, b, c] = mesh.corners(t);
+        let n = (b - a).cross(c - a);
+        if n.length_squared() < 1e-24 {
+            continue;
+        }
+        let sign = n.dot(normal).signum();
+        for k in 0..3 {
+            let (p, q, r) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            edges.entry((p.min(q), p.max(q))).or_default().push((sign, r));
+        }
+    }
+    let mut outward: HashMap<u32, DVec3> = HashMap::new();
+    for ((p, q), tris) in &edges {
+        if tris.len() != 2 || tris[0].0 == tris[1].0 {
+            continue;
+        }
+        let (vp, vq) = (mesh.vertices[*p as usize], mesh.vertices[*q as usize]);
+        let mut u = normal.cross(vq - vp).normalize_or_zero();
+        let inner = mesh.vertices[tris[0].1 as usize] - 0.5 * (vp + vq);
+        if u.dot(inner) > 0.0 {
+            u = -u;
+        }
+        for v in [*p, *q] {
+            *outward.entry(v).or_insert(DVec3::ZERO) += u;
+        }
+    }
+    let profile = |p: DVec3| -> Option<f64> {
+        let vals: Vec<f64> = steep
+            .iter()
+            .filter_map(|&j| seen(shots[j], p).map(|v| v / means[j]))
+            .collect();
+        (vals.len() >= 3).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
+    };
+    let moves: Vec<(u32, DVec3)> = outward
+        .par_iter()
+        .filter_map(|(&v, &u)| {
+            let u = u.normalize_or_zero();
+            if u == DVec3::ZERO {
+                return None;
+            }
+            let x = mesh.vertices[v as usize];
+            let ts: Vec<f64> = (-30..=30).map(|k| f64::from(k) * 0.1 * voxel_m).collect();
+            let l: Vec<Option<f64>> = ts.iter().map(|t| profile(x + *t * u)).collect();
+            let inside = l[..=30].iter().flatten().copied().fold(0.0, f64::max);
+            if inside <= 0.0 {
+                return None;
+            }
+            // Only an edge against darkness: where other light lies beyond it (another part
+            // behind, seen past the edge) the fall to half is not this part's edge.
+            if l[ts.len() - 1].is_none_or(|v| v > DARK_BEYOND * inside) {
+                return None;
+            }
+            let half = 0.5 * inside;
+            let peak = l[..=30].iter().position(|v| *v == Some(inside))?;
+            for k in peak..ts.len() - 1 {
+                if let (Some(a), Some(b)) = (l[k], l[k + 1]) {
+                    if a >= half && b < half {
+                        let t = ts[k] + (ts[k + 1] - ts[k]) * (a - half) / (a - b);
+                        return Some((v, t * u));
+                    }
+                }
+            }
+            None
+        })
+        .collect();
+    for (v, d) in moves {
+        mesh.vertices[v as usize] += d;
+    }
 }
 
 /// Centroid, unit normal (smallest principal axis) and the standard deviation along the largest
