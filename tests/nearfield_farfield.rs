@@ -5,17 +5,12 @@
 //! Fibonacci camera count and image size (default 1500, 48), `FFBW=DEG` the kernel's width.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use glam::DVec3;
 use lumiview::nearfield::farfield::{FarField, FarFieldOptions};
 use lumiview::nearfield::layout::Layout;
 use lumiview::nearfield::raykde::bandwidth::fibonacci;
 use lumiview::nearfield::synth::scan::{synth_scan, SynthOptions};
 use lumiview::nearfield::synth::{luminaire, Luminaire};
-
-fn angles(e: DVec3) -> (f64, f64) {
-    let g = (-e.z).clamp(-1.0, 1.0).acos().to_degrees();
-    (e.y.atan2(e.x).to_degrees().rem_euclid(360.0), g)
-}
+use lumiview::photometry::web::angles_of;
 
 fn percentile(mut v: Vec<f64>, p: f64) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -86,7 +81,7 @@ fn measure(name: &str, layout: Layout, px: u32) -> Row {
                 }
             })
             .sum();
-        let (c, g) = angles(d);
+        let (c, g) = angles_of(d.to_array());
         let got = ff.intensity(c, g);
         if t >= 0.01 * peak {
             raw.push((got / t - 1.0).abs());

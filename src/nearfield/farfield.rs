@@ -40,7 +40,7 @@ use super::binning::NearestDirection;
 use super::error::{NearfieldError, Result};
 use super::raykde::bandwidth::fibonacci;
 use super::rayset::{ImageSource, RayImageSet};
-use crate::photometry::{load_from_text, LoadOptions, Photometry};
+use crate::photometry::{load_from_text, web, LoadOptions, Photometry};
 
 /// Options of [`FarField::estimate`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,7 +101,7 @@ impl Histogram {
     }
 
     fn cell_of(&self, e: DVec3) -> usize {
-        let (c, g) = angles(e);
+        let (c, g) = web::angles_of(e.to_array());
         let step = 180.0 / self.n as f64;
         let gi = ((g / step) as usize).min(self.n - 1);
         let ci = ((c / step) as usize).min(2 * self.n - 1);
@@ -115,20 +115,9 @@ impl Histogram {
     }
 }
 
-/// (C, γ) in degrees of a unit emission direction (C in [0, 360)).
-fn angles(e: DVec3) -> (f64, f64) {
-    let g = (-e.z).clamp(-1.0, 1.0).acos().to_degrees();
-    let mut c = e.y.atan2(e.x).to_degrees();
-    if c < 0.0 {
-        c += 360.0;
-    }
-    (c, g)
-}
-
-/// The direction of (C, γ) in degrees (docs/conventions.md).
+/// The direction of (C, γ) in degrees (docs/conventions.md), as a vector.
 fn direction(c_deg: f64, g_deg: f64) -> DVec3 {
-    let (c, g) = (c_deg.to_radians(), g_deg.to_radians());
-    DVec3::new(g.sin() * c.cos(), g.sin() * c.sin(), -g.cos())
+    DVec3::from_array(web::direction(c_deg, g_deg))
 }
 
 /// The normalised von Mises–Fisher kernel K(e, s) = norm · exp(κ (e·s − 1)), cut at `reach` (rad).
@@ -260,18 +249,19 @@ impl FarField {
         // Rays → histogram, cameras in chunks (bounded memory), each camera's lit blocks in parallel.
         let done = std::sync::atomic::AtomicUsize::new(0);
         let mut total_flux = 0.0;
-        for chunk in used.chunks(64) {
+        let block = ((0.25 * cell_rad / pixel_rad.max(1e-9)).floor() as u32).clamp(1, 64);
+        let subset: Vec<usize> = (0..used.len()).collect();
+        for chunk in subset.chunks(64) {
             let sparse: Vec<Result<Vec<(usize, f64)>>> = chunk
                 .par_iter()
-                .map(|&i| {
+                .map(|&u| {
+                    let (i, w) = (used[u], omega[u]);
                     let cam = &set.cameras[i];
                     let k = set.intrinsics_of(i);
                     let img = images.image(i)?;
                     img.validate(&cam.label, k)?;
                     let s = all_dirs[i];
                     let r2 = (cam.position_m - centre).length_squared();
-                    let w = omega[used.binary_search(&i).unwrap_or(0)];
-                    let block = ((0.25 * cell_rad / pixel_rad.max(1e-9)).floor() as u32).clamp(1, 64);
                     let mut out = Vec::new();
                     for by in (0..img.height).step_by(block as usize) {
                         for bx in (0..img.width).step_by(block as usize) {

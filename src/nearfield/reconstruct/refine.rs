@@ -183,7 +183,7 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
                 .copied()
                 .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
                 .collect();
-            snap_outline(mesh, &on, normal, voxel_m, &seeing, &means, &lit);
+            snap_outline(mesh, &on, (centre, normal), voxel_m, &seeing, &means, &lit);
         }
         fits.push(PlaneFit {
             absorbed,
@@ -197,8 +197,9 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
     fits
 }
 
-/// Moves the outline of a flattened part (the vertices `on` its plane, normal `normal`) to where
-/// the cameras that look at the plane from above 30° see its light fall to half: the rim where the
+/// Moves the outline of a flattened part (the vertices `on` its plane, given as `(centre,
+/// normal)`) to where the cameras that look at the plane from above 30° (seen from `centre`) see
+/// its light fall to half: the rim where the
 /// part's two collapsed sheets fold onto each other (an edge between two of its triangles facing
 /// opposite ways) is right to about a cell, and a capture pixel half on the source is half lit, so
 /// an outline a cell too far out draws that half-lit rim as light. Each fold vertex looks along
@@ -209,7 +210,7 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
 fn snap_outline(
     mesh: &mut Mesh,
     on: &std::collections::HashSet<usize>,
-    normal: DVec3,
+    (centre, normal): (DVec3, DVec3),
     voxel_m: f64,
     shots: &[&Shot],
     means: &[f64],
@@ -220,7 +221,7 @@ fn snap_outline(
         .iter()
         .copied()
         .filter(|&j| {
-            let to = shots[j].camera.position_m - mesh.vertices[*on.iter().next().unwrap_or(&0)];
+            let to = shots[j].camera.position_m - centre;
             (to.dot(normal) / to.length()).abs() >= 30f64.to_radians().sin()
         })
         .collect();
