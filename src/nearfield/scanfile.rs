@@ -55,7 +55,8 @@ const SNIFF_BYTES: usize = 4096;
 
 /// Cache format: part of every key, so a change of the defaults below invalidates old entries.
 const CACHE_VERSION: &str =
-    "lumiview scan cache 6: lvpack defaults, tm25 kernel estimate v1 with its proxy, manifest strict with a \
+    "lumiview scan cache 7: lvpack defaults, tm25 kernel estimate v2 (intensity widths capped at their median, \
+     cameras dense to the emission's edge, rays scaled to the header's total) with its proxy, manifest strict with a \
      reconstructed proxy v4 (thin parts collapsed, free grazing plane, stray parts dropped, flat parts on the \
      plane the images agree on)";
 

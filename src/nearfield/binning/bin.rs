@@ -8,7 +8,7 @@ use super::nearest::NearestDirection;
 use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::layout::{self, Layout};
 use crate::nearfield::rayset::{CaptureSphere, Intrinsics, LuminanceImage, MemorySource, RayImageSet, Scan};
-use crate::nearfield::tm25::{LuminousSource, Ray, RayFile};
+use crate::nearfield::tm25::{LuminousSource, Ray, RayFile, RayFlux};
 
 /// Upper bound on the pixels of all binned images together (2²⁶ f32 = 256 MiB).
 pub const MAX_TOTAL_PIXELS: u64 = 1 << 26;
@@ -29,9 +29,10 @@ pub struct BinningOptions {
     /// Full horizontal field of view (degrees, square pixels); `None` fits the widest object-plane
     /// crossing of any ray (+2 %) into the image.
     pub fov_deg: Option<f64>,
-    /// Scale the rays' luminous fluxes so that they sum to the header's luminous flux (for files whose
-    /// ray fluxes are relative weights). Off by default: ray values are used as they are.
-    pub scale_to_header_flux: bool,
+    /// What the rays' flux values mean: scaled to the header's total where it states one (the
+    /// default; TM-25 ray fluxes are relative weights in files that give the total), or the rays'
+    /// own values.
+    pub ray_flux: RayFlux,
 }
 
 impl Default for BinningOptions {
@@ -46,7 +47,7 @@ impl Default for BinningOptions {
             width: 64,
             height: 64,
             fov_deg: None,
-            scale_to_header_flux: false,
+            ray_flux: RayFlux::Header,
         }
     }
 }
@@ -199,22 +200,9 @@ pub fn bin_rays(file: &RayFile, opts: &BinningOptions) -> Result<BinnedScan> {
     let lookup = NearestDirection::new(&dirs);
 
     let n = file.len();
-    let scale = if opts.scale_to_header_flux {
-        let sum: f64 = (0..n).into_par_iter().filter_map(|i| file.ray(i)?.luminous_lm).sum();
-        match file.header().luminous_flux_lm {
-            Some(hf) if hf > 0.0 && sum > 0.0 => hf / sum,
-            _ => {
-                return Err(NearfieldError::invalid(
-                    "scale-to-header-flux",
-                    format!(
-                        "{}: needs a positive header luminous flux and rays with flux",
-                        file.path().display()
-                    ),
-                ))
-            }
-        }
-    } else {
-        1.0
+    let scale = match opts.ray_flux {
+        RayFlux::Header => file.header_scale().map_or(1.0, |h| h.factor),
+        RayFlux::Rays => 1.0,
     };
 
     // Field of view: given, or fitted to the widest crossing.

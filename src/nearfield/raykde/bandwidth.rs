@@ -19,8 +19,33 @@ use crate::nearfield::error::{NearfieldError, Result};
 /// Access to ray `i`: origin (m), unit direction, luminous flux (lm); `None` to skip it.
 pub type RayGet<'a> = &'a (dyn Fn(usize) -> Option<(DVec3, DVec3, f64)> + Sync);
 
-/// Angle bins of the k-nearest-neighbour search (0…π).
+/// Angle bins of the k-nearest-neighbour search (0 to the search radius).
 const ANGLE_BINS: usize = 1024;
+
+/// Fine cells per bucket of the k-nearest-neighbour search (about).
+const CELLS_PER_BUCKET: usize = 24;
+
+/// Fine directions per effective ray (at least 2,000, at most 40,000 directions): the finest
+/// angular width is 1.5 cells, so a beam of many rays gets kernels that fine.
+const FINE_PER_RAY: f64 = 0.5;
+
+/// The intensity widths are capped at this multiple of their flux-weighted median (the footprint
+/// pool's at [`POOL_CAP`]). Where rays are sparse (the flank of a beam, an emitter's horizon) a
+/// k-nearest-neighbour width grows, and a wide kernel there moves the flux of the rays it holds
+/// outwards, past the edge of the emission: the LED's intensity 12.5–17.5° above its horizon read
+/// 10–25 % low with a cap of 3 (5° rings of the measured LED, docs/rayfiles.md).
+const INTENSITY_CAP: f64 = 1.0;
+
+/// The footprint pool's cap (a multiple of its flux-weighted median width).
+const POOL_CAP: f64 = 3.0;
+
+/// A direction is dark where fewer than this share of an intensity kernel's rays lie within the
+/// widest intensity width of it (its intensity is then under about 1 % of one at the median
+/// width's density); the layout spaces its cameras [`POOL_CAP`] median widths apart there.
+/// Elsewhere they sit about 0.7 capped intensity widths apart: on a beam's flank the intensity
+/// falls by 10× within a few kernel widths, and cameras spaced for the dark side there read it
+/// 20 % high between them (the point source's 12.5° ring).
+const DARK_SHARE: f64 = 0.01;
 
 /// Directions at which the angular width is computed exactly for the layout (the others take
 /// their nearest one's).
@@ -78,6 +103,8 @@ pub struct Bandwidths {
     lit: Vec<usize>,
     /// Angular radius of a fine cell (rad).
     cell_radius: f64,
+    /// The lit cells grouped by direction, for the k-nearest-neighbour search.
+    buckets: Buckets,
     /// Narrowest and widest angular half-width allowed (rad).
     h_min: f64,
     h_max: f64,
@@ -91,6 +118,8 @@ pub struct Bandwidths {
     cell_hi: Vec<f64>,
     /// Widest intensity width allowed (rad).
     hi_max: f64,
+    /// The width the layout plans with in dark directions (rad).
+    dark_spacing_h: f64,
     /// A fixed intensity width (rad), where the user gave one.
     fixed_hi: Option<f64>,
     /// Effective rays, (Σ Φ)² / Σ Φ².
@@ -158,7 +187,7 @@ impl Bandwidths {
             .rays_per_intensity_kernel
             .unwrap_or(DEFAULT_BI * n_eff.powf(2.0 / 3.0))
             .clamp(1.0, k_a);
-        let n_fine = ((n_eff / 8.0) as usize).clamp(2000, 40_000);
+        let n_fine = ((n_eff * FINE_PER_RAY) as usize).clamp(2000, 40_000);
         let fine_dirs = fibonacci(n_fine);
         let fine = NearestDirection::new(&fine_dirs);
         let flux_per_ray = flux / n_eff;
@@ -185,6 +214,7 @@ impl Bandwidths {
         let lit: Vec<usize> = (0..n_fine).filter(|&j| counts[j] > 0.0).collect();
         let cell_radius = (4.0 * PI / n_fine as f64 / PI).sqrt() * 1.2;
         let coarse_dirs = fibonacci(COARSE_DIRECTIONS);
+        let buckets = Buckets::new(&fine_dirs, &lit, &counts);
         let mut me = Self {
             rays_per_kernel: k_s,
             rays_per_angular_kernel: k_a,
@@ -194,6 +224,7 @@ impl Bandwidths {
             counts,
             lit,
             cell_radius,
+            buckets,
             h_min: 1.5 * cell_radius,
             h_max: PI / 2.0,
             coarse: NearestDirection::new(&coarse_dirs),
@@ -201,13 +232,14 @@ impl Bandwidths {
             cell_h: Vec::new(),
             cell_hi: Vec::new(),
             hi_max: PI / 2.0,
+            dark_spacing_h: PI / 2.0,
             fixed_hi: opts.angular_kernel_deg.map(f64::to_radians),
             n_eff,
             flux_per_ray,
             source_radius: source.radius,
         };
-        // Caps: three times the flux-weighted median width of the lit directions.
-        let cap = |k: f64| -> f64 {
+        // The flux-weighted median width of the lit directions (caps are multiples of it).
+        let median = |k: f64| -> f64 {
             let raw: Vec<(f64, f64)> = coarse_dirs.par_iter().map(|d| me.knn_angle(*d, k)).collect();
             let mut lit_h: Vec<(f64, f64)> = raw.into_iter().filter(|(_, w)| *w > 0.0).collect();
             lit_h.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -216,14 +248,16 @@ impl Bandwidths {
             for (h, w) in &lit_h {
                 acc += w;
                 if acc >= total / 2.0 {
-                    return (3.0 * h).clamp(me.h_min, PI / 2.0);
+                    return *h;
                 }
             }
             PI / 2.0
         };
-        let (h_max, hi_max) = (cap(k_a), cap(k_i));
-        me.h_max = h_max;
-        me.hi_max = hi_max.min(h_max);
+        let (m_a, m_i) = (median(k_a), median(k_i));
+        let cap = |m: f64, f: f64| (f * m).clamp(me.h_min, PI / 2.0);
+        me.h_max = cap(m_a, POOL_CAP);
+        me.hi_max = cap(m_i, INTENSITY_CAP).min(me.h_max);
+        me.dark_spacing_h = cap(m_i, POOL_CAP).min(me.h_max);
         let fixed = opts.angular_kernel_deg.map(f64::to_radians);
         let widths: Vec<(usize, f64, f64)> = me
             .lit
@@ -241,10 +275,19 @@ impl Bandwidths {
             me.cell_h[j] = hs;
             me.cell_hi[j] = hi;
         }
-        // The layout plans with the intensity widths (spread over the unlit directions too).
+        // The layout plans with the intensity widths, and spaces the cameras wider where nothing is
+        // emitted (dark directions would otherwise take as many cameras as lit ones).
         me.coarse_h = coarse_dirs
             .par_iter()
-            .map(|d| fixed.unwrap_or_else(|| me.knn_angle(*d, k_i).0.clamp(me.h_min, me.hi_max)))
+            .map(|d| {
+                fixed.unwrap_or_else(|| {
+                    if me.knn_angle(*d, DARK_SHARE * k_i).0 > me.hi_max {
+                        me.dark_spacing_h
+                    } else {
+                        me.knn_angle(*d, k_i).0.clamp(me.h_min, me.hi_max)
+                    }
+                })
+            })
             .collect();
         if n_eff < 1000.0 {
             warnings.push(format!(
@@ -258,17 +301,31 @@ impl Bandwidths {
     /// The k-nearest-neighbour angle about `d` holding `k` rays (rad), and the rays within the
     /// fine cell nearest `d` (a weight for medians over directions).
     fn knn_angle(&self, d: DVec3, k: f64) -> (f64, f64) {
+        let Some(reach) = self.buckets.reach(d, k) else {
+            return (PI, 0.0);
+        };
+        // Every cell within `reach` of d is in a bucket whose centre is within reach + its radius.
         let mut hist = [0.0f64; ANGLE_BINS];
-        for &j in &self.lit {
-            let a = d.dot(self.fine_dirs[j]).clamp(-1.0, 1.0).acos();
-            let b = ((a / PI) * ANGLE_BINS as f64) as usize;
-            hist[b.min(ANGLE_BINS - 1)] += self.counts[j];
+        let top = reach.min(PI);
+        let scan = (reach + self.buckets.radius).min(PI).cos();
+        for (b, cells) in self.buckets.cells.iter().enumerate() {
+            if cells.is_empty() || d.dot(self.buckets.dirs[b]) < scan {
+                continue;
+            }
+            for &j in cells {
+                let j = j as usize;
+                let a = d.dot(self.fine_dirs[j]).clamp(-1.0, 1.0).acos();
+                if a <= top {
+                    let i = ((a / top) * ANGLE_BINS as f64) as usize;
+                    hist[i.min(ANGLE_BINS - 1)] += self.counts[j];
+                }
+            }
         }
         let mut acc = 0.0;
         for (b, c) in hist.iter().enumerate() {
             if acc + c >= k {
                 let t = if *c > 0.0 { (k - acc) / c } else { 1.0 };
-                let h = (b as f64 + t) * PI / ANGLE_BINS as f64;
+                let h = (b as f64 + t) * top / ANGLE_BINS as f64;
                 let own = self.fine.nearest(d).map_or(0.0, |j| self.counts[j]);
                 return (h, own);
             }
@@ -464,6 +521,70 @@ impl Bandwidths {
     }
 }
 
+/// The lit fine cells grouped by the nearest of a few hundred to a few thousand bucket directions:
+/// a k-nearest-neighbour search first finds, from the buckets' counts, a radius that surely holds
+/// k rays, then histograms only the cells of the buckets that radius reaches (it visited every lit
+/// cell for every direction before: O(cells²)).
+#[derive(Debug, Clone)]
+struct Buckets {
+    dirs: Vec<DVec3>,
+    /// The farthest a member cell lies from its bucket's direction (rad).
+    radius: f64,
+    cells: Vec<Vec<u32>>,
+    /// Effective rays per bucket.
+    counts: Vec<f64>,
+}
+
+impl Buckets {
+    fn new(fine_dirs: &[DVec3], lit: &[usize], counts: &[f64]) -> Self {
+        let n = (fine_dirs.len() / CELLS_PER_BUCKET).clamp(12, 4000);
+        let dirs = fibonacci(n);
+        let near = NearestDirection::new(&dirs);
+        let mut cells = vec![Vec::new(); n];
+        let mut sums = vec![0.0; n];
+        let mut radius = 0.0f64;
+        for &j in lit {
+            if let Some(b) = near.nearest(fine_dirs[j]) {
+                cells[b].push(j as u32);
+                sums[b] += counts[j];
+                radius = radius.max(fine_dirs[j].dot(dirs[b]).clamp(-1.0, 1.0).acos());
+            }
+        }
+        Self {
+            dirs,
+            radius: radius + 1e-9,
+            cells,
+            counts: sums,
+        }
+    }
+
+    /// A radius about `d` (rad) that holds at least `k` rays, or `None` when all of them hold fewer.
+    fn reach(&self, d: DVec3, k: f64) -> Option<f64> {
+        const BINS: usize = 512;
+        let mut hist = [0.0f64; BINS];
+        let mut total = 0.0;
+        for (b, c) in self.counts.iter().enumerate() {
+            if *c > 0.0 {
+                let a = d.dot(self.dirs[b]).clamp(-1.0, 1.0).acos();
+                hist[((a / PI * BINS as f64) as usize).min(BINS - 1)] += c;
+                total += c;
+            }
+        }
+        if total < k {
+            return None;
+        }
+        let mut acc = 0.0;
+        for (i, c) in hist.iter().enumerate() {
+            acc += c;
+            if acc >= k {
+                // Every cell of the buckets up to here lies within this angle of d.
+                return Some((i + 1) as f64 * PI / BINS as f64 + self.radius);
+            }
+        }
+        Some(PI)
+    }
+}
+
 /// Greedy Poisson-disc selection: a direction is kept when no kept one lies within `factor` × its
 /// width. `None` when more than `limit` would be kept.
 fn poisson(order: &[(f64, DVec3)], factor: f64, limit: usize) -> Option<Vec<DVec3>> {
@@ -525,6 +646,71 @@ mod tests {
                 s += c * (1.0 - (t / h).powi(2)) * 2.0 * PI * t.sin() * h / n as f64;
             }
             assert!((s - 1.0).abs() < 1e-6, "h {h}: {s}");
+        }
+    }
+
+    #[test]
+    fn the_bucketed_neighbour_search_finds_the_brute_force_angle() {
+        // A narrow beam (half the rays within 5° of +z) over a sparse hemisphere.
+        let n = 20_000;
+        let mut dirs = Vec::with_capacity(n);
+        let mut s = 0x9E37_79B9_7F4A_7C15u64;
+        let mut u = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for i in 0..n {
+            let (ct, phi) = if i % 2 == 0 {
+                (1.0 - u() * (1.0 - 5f64.to_radians().cos()), 2.0 * PI * u())
+            } else {
+                (u(), 2.0 * PI * u())
+            };
+            let st = (1.0 - ct * ct).sqrt();
+            dirs.push(DVec3::new(st * phi.cos(), st * phi.sin(), ct));
+        }
+        let get = |i: usize| Some((DVec3::ZERO, dirs[i], 1.0));
+        let source = SourceCloud::of(|_| Some(DVec3::ZERO), 1);
+        let bw = Bandwidths::choose(
+            &get,
+            RaySummary {
+                n,
+                n_eff: n as f64,
+                flux_lm: n as f64,
+            },
+            &KdeOptions::default(),
+            &source,
+            &mut Vec::new(),
+            Path::new("test"),
+        )
+        .unwrap();
+        let brute = |d: DVec3, k: f64| -> f64 {
+            let mut v: Vec<(f64, f64)> = bw
+                .lit
+                .iter()
+                .map(|&j| (d.dot(bw.fine_dirs[j]).clamp(-1.0, 1.0).acos(), bw.counts[j]))
+                .collect();
+            v.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let mut acc = 0.0;
+            for (a, c) in v {
+                acc += c;
+                if acc >= k {
+                    return a;
+                }
+            }
+            PI
+        };
+        for (i, d) in fibonacci(300).into_iter().enumerate() {
+            for k in [50.0, 700.0, 12_000.0] {
+                let (got, _) = bw.knn_angle(d, k);
+                let want = brute(d, k);
+                // The histogram resolves the angle to within one bin of its search radius.
+                assert!(
+                    (got - want).abs() <= 0.01 * want.max(0.05) + bw.cell_radius * 0.05,
+                    "direction {i}, k {k}: {got} against {want}"
+                );
+            }
         }
     }
 

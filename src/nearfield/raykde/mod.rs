@@ -51,6 +51,7 @@ use self::pyramid::LEVEL_SIGMA_PX;
 use super::error::{NearfieldError, Result};
 use super::rayset::Scan;
 use super::synth::proxy::ProxyMesh;
+use super::tm25::RayFlux;
 
 /// Upper bound on the pixels of all images together (2²⁶ f32 = 256 MiB, as for binning).
 pub const MAX_TOTAL_PIXELS: u64 = 1 << 26;
@@ -90,8 +91,9 @@ pub struct KdeOptions {
     pub image_px: Option<u32>,
     /// Capture sphere radius in metres (default max(1.1 m, 8 × the source's radius)).
     pub radius_m: Option<f64>,
-    /// Scale the rays' luminous fluxes to sum to the header's luminous flux.
-    pub scale_to_header_flux: bool,
+    /// What the rays' flux values mean: scaled to the header's total where it states one (the
+    /// default), or the rays' own values.
+    pub ray_flux: RayFlux,
     /// Keep the spatial kernel level of every pixel ([`KernelMaps::level`], as much memory as the
     /// images), which [`estimate_frozen`] needs; otherwise they are dropped camera by camera.
     pub keep_kernel_levels: bool,

@@ -15,7 +15,7 @@ use super::{
 use crate::nearfield::binning::NearestDirection;
 use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::rayset::{Camera, CaptureSphere, Hemisphere, Intrinsics, MemorySource, RayImageSet, Scan};
-use crate::nearfield::tm25::{LuminousSource, RayFile};
+use crate::nearfield::tm25::{LuminousSource, RayFile, RayFlux};
 
 /// The rays of a file as plain numbers (metres, unit directions, lm), in file order.
 struct Rays<'a> {
@@ -143,18 +143,12 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
             format!("{}: no ray with a positive luminous flux", path.display()),
         ));
     }
-    let scale = if opts.scale_to_header_flux {
-        match file.header().luminous_flux_lm {
-            Some(h) if h > 0.0 => h / sum,
-            _ => {
-                return Err(NearfieldError::invalid(
-                    "scale-to-header-flux",
-                    format!("{}: needs a positive header luminous flux", path.display()),
-                ))
-            }
-        }
-    } else {
-        1.0
+    let scale = match opts.ray_flux {
+        RayFlux::Header => file.header_scale().map_or(1.0, |h| {
+            warnings.push(h.describe(&path));
+            h.factor
+        }),
+        RayFlux::Rays => 1.0,
     };
     let rays = Rays {
         file,

@@ -52,7 +52,7 @@ mod stats;
 mod writer;
 
 pub use header::{CreationMethod, Description, SpectralKind, Tm25Flags, Tm25Header};
-pub use rays::{Ray, RayFile, Rays};
+pub use rays::{HeaderScale, Ray, RayFile, RayFlux, Rays};
 pub use spectral::{photopic_efficiency, LuminousSource, SpectralTable, K_M};
 pub use stats::RayStats;
 pub use writer::encode;

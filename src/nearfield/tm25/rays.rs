@@ -25,6 +25,55 @@ pub struct Ray {
     pub spectrum_index: Option<usize>,
 }
 
+/// What a ray file's flux values mean in absolute terms.
+///
+/// TM-25 gives the set's total flux in the header (Φv in lm, Φe in W) beside each ray's flux. The
+/// tools that write ray sets treat the rays' values as relative weights and the header's total as
+/// the source's flux (LightTools' and OpticStudio's ray-file headers carry "the total flux of this
+/// source", which the reference TM-25 tools map to and from the TM-25 header); a ray set resampled
+/// or cut keeps its header total in step. Files in the wild differ: the measured OSRAM LED's rays
+/// sum to its header's 337 lm, a LightTools cylinder's 10,000 rays of ~1 lm each sit under a
+/// header of 1 lm, and a point source written by the TM-25 tools carries rays of 0.1–1 W under a
+/// header of 1 W.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RayFlux {
+    /// The header's total, where it states one and the rays' sum differs from it by more than
+    /// 1 %: the rays are scaled to it, with a warning naming both. Otherwise the rays' values.
+    #[default]
+    Header,
+    /// The rays' own values, whatever the header says.
+    Rays,
+}
+
+/// The factor that brings a ray set's fluxes to its header's total ([`RayFile::header_scale`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeaderScale {
+    /// Multiply every ray's flux by this.
+    pub factor: f64,
+    /// The rays' sum and the header's total, in `unit`.
+    pub rays_sum: f64,
+    /// The header's total, in `unit`.
+    pub header_total: f64,
+    /// "lm" (the header's Φv against the rays' luminous fluxes) or "W" (Φe against the radiant).
+    pub unit: &'static str,
+}
+
+impl HeaderScale {
+    /// A sentence for a warning: what the file holds and what was done.
+    pub fn describe(&self, path: &Path) -> String {
+        format!(
+            "{}: the rays' fluxes sum to {:.6} {u}, the header states {} {u}: the rays are scaled by {:.6e} to the \
+             header's total (TM-25 ray fluxes are relative where the header gives the total; the rays' own values \
+             are kept with `--ray-flux rays`)",
+            path.display(),
+            self.rays_sum,
+            self.header_total,
+            self.factor,
+            u = self.unit
+        )
+    }
+}
+
 /// Column positions inside a record.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Columns {
@@ -143,6 +192,38 @@ impl RayFile {
             radiant_w,
             wavelength_nm,
             spectrum_index,
+        })
+    }
+
+    /// The factor that brings the rays' luminous fluxes to the total the header states, where it
+    /// states one (Φv > 0 compared with the rays' luminous fluxes; else Φe > 0 with their radiant
+    /// column) and the rays' sum differs from it by more than 1 %. `None` otherwise: no total in
+    /// the header, no ray with flux, or sums within 1 % (the rays' values then stand).
+    pub fn header_scale(&self) -> Option<HeaderScale> {
+        let ok = |v: Option<f64>| v.filter(|x| x.is_finite() && *x > 0.0);
+        let (sum, header, unit) = if let Some(h) = ok(self.header.luminous_flux_lm) {
+            let s: f64 = (0..self.len())
+                .filter_map(|i| self.ray(i)?.luminous_lm)
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .sum();
+            (s, h, "lm")
+        } else if let (Some(h), Some(_)) = (ok(self.header.radiant_flux_w), self.columns.radiant) {
+            let s: f64 = (0..self.len())
+                .filter_map(|i| self.ray(i)?.radiant_w)
+                .filter(|f| f.is_finite() && *f > 0.0)
+                .sum();
+            (s, h, "W")
+        } else {
+            return None;
+        };
+        if sum <= 0.0 || sum.is_nan() || (sum - header).abs() <= 0.01 * header.max(sum) {
+            return None;
+        }
+        Some(HeaderScale {
+            factor: header / sum,
+            rays_sum: sum,
+            header_total: header,
+            unit,
         })
     }
 

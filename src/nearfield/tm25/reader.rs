@@ -387,7 +387,8 @@ impl RayFile {
                 let s = sum(j);
                 if (s - h).abs() > 0.01 * h.abs().max(s.abs()) {
                     self.warnings.push(format!(
-                        "the rays' {name} fluxes sum to {s:.6} {unit}, the header states {h} {unit}; ray values are used as they are"
+                        "the rays' {name} fluxes sum to {s:.6} {unit}, the header states {h} {unit} (lumiview takes the header's \
+                         total as the source's flux unless told otherwise: docs/formats.md)"
                     ));
                 }
             }

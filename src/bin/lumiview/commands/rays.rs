@@ -6,12 +6,30 @@ use clap::Args;
 use glam::DVec3;
 use lumiview::nearfield::binning::{bin_rays, BinningOptions, BinningReport};
 use lumiview::nearfield::raykde::{estimate, KdeOptions};
-use lumiview::nearfield::tm25::{RayFile, RayStats};
+use lumiview::nearfield::tm25::{RayFile, RayFlux, RayStats};
 use lumiview::nearfield::CaptureSphere;
 use lumiview::nearfield::Scan;
 use serde_json::{json, Value};
 
 use super::{print_report, CliResult};
+
+/// `--ray-flux`: what a ray file's flux values mean.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum RayFluxArg {
+    /// The header's total flux, where it states one and the rays' sum differs by more than 1 %.
+    Header,
+    /// The rays' own values.
+    Rays,
+}
+
+impl From<RayFluxArg> for RayFlux {
+    fn from(a: RayFluxArg) -> Self {
+        match a {
+            RayFluxArg::Header => RayFlux::Header,
+            RayFluxArg::Rays => RayFlux::Rays,
+        }
+    }
+}
 
 /// `lumiview rays2scan`: turn a TM-25 ray file into the luminance images of a virtual scan.
 #[derive(Args, Debug)]
@@ -66,18 +84,21 @@ pub struct Rays2scanArgs {
     /// histogram: seed of the layout's jitter (`rigo`).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Scale the rays' luminous fluxes to sum to the header's luminous flux.
-    #[arg(long)]
-    pub scale_to_header_flux: bool,
+    /// What the rays' flux values mean: `header` (default) scales them to the header's total
+    /// flux where it states one and their sum differs by more than 1 % (TM-25 ray fluxes are then
+    /// relative weights; a warning names both), `rays` keeps the rays' own values.
+    #[arg(long, value_enum, default_value_t = RayFluxArg::Header)]
+    pub ray_flux: RayFluxArg,
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
     /// Estimate and report, but write nothing.
     #[arg(long)]
     pub dry_run: bool,
-    /// kde: render the estimate orthographically on the GPU at the centres of the 5° direction
-    /// bins every 15° of C and compare the intensity with the rays binned by direction (cd);
-    /// prints the median and 95th percentile error over the bins holding ≥ 1 % of the peak.
+    /// kde: render the estimate orthographically on the GPU over the 5° direction bins every 15°
+    /// of C (four views per bin, averaged as the bin averages its rays) and compare the intensity
+    /// with the rays binned by direction (cd); prints the median and 95th percentile error over the
+    /// bins holding ≥ 1 % of the peak, beside the bins' own noise, and over 5° γ rings.
     #[arg(long)]
     pub check: bool,
 }
@@ -383,7 +404,7 @@ fn report_text(file: &Path, manifest: Option<&Path>, r: &BinningReport) -> Strin
     if r.flux_scale != 1.0 {
         outln!(
             out,
-            "flux scale        × {:.6} (to the header's luminous flux)",
+            "flux scale        × {:.6e} (the rays' sum to the header's total flux)",
             r.flux_scale
         );
     }
@@ -550,7 +571,7 @@ fn rays2scan_histogram(args: &Rays2scanArgs) -> CliResult {
         width,
         height,
         fov_deg,
-        scale_to_header_flux: args.scale_to_header_flux,
+        ray_flux: args.ray_flux.into(),
     };
     let file = RayFile::read(&args.file)?;
     let binned = bin_rays(&file, &opts)?;
@@ -619,7 +640,7 @@ fn rays2scan_kde(args: &Rays2scanArgs) -> CliResult {
         cameras: args.cameras,
         image_px: args.image_px,
         radius_m: args.radius,
-        scale_to_header_flux: args.scale_to_header_flux,
+        ray_flux: args.ray_flux.into(),
         keep_kernel_levels: false,
     };
     let file = RayFile::read(&args.file)?;
@@ -663,13 +684,16 @@ fn rays2scan_kde(args: &Rays2scanArgs) -> CliResult {
         }
         let mut t = kde_text(&args.file, written.as_deref(), &r, &dir);
         t.push_str(&format!(
-            "far field         {} bins of 5° compared (≥ 1 % of the peak {:.4} cd): |render / rays − 1| median {:.2} %, \
-             95th percentile {:.2} % (the rays' own noise per bin: median {:.2} %)\n",
+            "far field         {} bins of 5° compared (≥ 1 % of the peak {:.4} cd; the render averaged over each bin): \
+             |render / rays − 1| median {:.2} %, 95th percentile {:.2} % (the rays' own noise per bin: median {:.2} %; \
+             the difference in units of it: median {:.2}, 95th percentile {:.2}, where noise alone gives 0.67 and 1.96)\n",
             c.counted,
             c.peak_cd,
             100.0 * c.median_rel,
             100.0 * c.p95_rel,
-            100.0 * c.median_reference_noise
+            100.0 * c.median_reference_noise,
+            c.median_z,
+            c.p95_z
         ));
         t.push_str(&format!(
             "far field, rings  {} γ rings of 5° (the mean over C, ≥ 1 % of the peak): median {:.2} %, 95th percentile \
