@@ -29,22 +29,26 @@ const CELLS_PER_BUCKET: usize = 24;
 /// angular width is 1.5 cells, so a beam of many rays gets kernels that fine.
 const FINE_PER_RAY: f64 = 0.5;
 
-/// The intensity widths are capped at this multiple of their flux-weighted median (the footprint
-/// pool's at [`POOL_CAP`]). Where rays are sparse (the flank of a beam, an emitter's horizon) a
-/// k-nearest-neighbour width grows, and a wide kernel there moves the flux of the rays it holds
-/// outwards, past the edge of the emission: the LED's intensity 12.5–17.5° above its horizon read
-/// 10–25 % low with a cap of 3 (5° rings of the measured LED, docs/rayfiles.md).
-const INTENSITY_CAP: f64 = 1.0;
+/// An intensity width grows past the flux-weighted median width only as far as it must to hold
+/// this share of k_I rays ([`Bandwidths::intensity_width`]), and never past [`POOL_CAP`] medians.
+/// Where rays are sparse (the flank of a beam, an emitter's horizon) a k-nearest-neighbour width
+/// grows, and a wide kernel there moves the flux of the rays it holds outwards, past the edge of
+/// the emission: the measured LED's intensity 12.5–17.5° above its horizon read 10 % low with
+/// k-nearest-neighbour widths up to 3 medians, and the point source's 12.5° ring 18 % high. Held
+/// at the median width there, they are within 2.5 % and 5 %; but in the far tails of a beam (a
+/// cos¹⁰ lobe at 55°, 0.4 % of its peak) a kernel of median width holds a handful of rays, whose
+/// noise doubled the convergence harness's log RMSE: there the kernel widens to hold this share.
+const MIN_INTENSITY_SHARE: f64 = 0.1;
 
 /// The footprint pool's cap (a multiple of its flux-weighted median width).
 const POOL_CAP: f64 = 3.0;
 
 /// A direction is dark where fewer than this share of an intensity kernel's rays lie within the
-/// widest intensity width of it (its intensity is then under about 1 % of one at the median
+/// median intensity width of it (its intensity is then under about 1 % of one at the median
 /// width's density); the layout spaces its cameras [`POOL_CAP`] median widths apart there.
-/// Elsewhere they sit about 0.7 capped intensity widths apart: on a beam's flank the intensity
-/// falls by 10× within a few kernel widths, and cameras spaced for the dark side there read it
-/// 20 % high between them (the point source's 12.5° ring).
+/// Elsewhere they sit about 0.7 intensity widths apart: on a beam's flank the intensity falls by
+/// 10× within a few kernel widths, and cameras spaced for the dark side there read it 20 % high
+/// between them (the point source's 12.5° ring).
 const DARK_SHARE: f64 = 0.01;
 
 /// Directions at which the angular width is computed exactly for the layout (the others take
@@ -118,6 +122,8 @@ pub struct Bandwidths {
     cell_hi: Vec<f64>,
     /// Widest intensity width allowed (rad).
     hi_max: f64,
+    /// The flux-weighted median of the k-nearest-neighbour intensity widths (rad).
+    hi_median: f64,
     /// The width the layout plans with in dark directions (rad).
     dark_spacing_h: f64,
     /// A fixed intensity width (rad), where the user gave one.
@@ -232,6 +238,7 @@ impl Bandwidths {
             cell_h: Vec::new(),
             cell_hi: Vec::new(),
             hi_max: PI / 2.0,
+            hi_median: PI / 2.0,
             dark_spacing_h: PI / 2.0,
             fixed_hi: opts.angular_kernel_deg.map(f64::to_radians),
             n_eff,
@@ -256,7 +263,8 @@ impl Bandwidths {
         let (m_a, m_i) = (median(k_a), median(k_i));
         let cap = |m: f64, f: f64| (f * m).clamp(me.h_min, PI / 2.0);
         me.h_max = cap(m_a, POOL_CAP);
-        me.hi_max = cap(m_i, INTENSITY_CAP).min(me.h_max);
+        me.hi_max = cap(m_i, POOL_CAP).min(me.h_max);
+        me.hi_median = m_i.clamp(me.h_min, me.hi_max);
         me.dark_spacing_h = cap(m_i, POOL_CAP).min(me.h_max);
         let fixed = opts.angular_kernel_deg.map(f64::to_radians);
         let widths: Vec<(usize, f64, f64)> = me
@@ -265,7 +273,7 @@ impl Bandwidths {
             .map(|&j| {
                 let d = me.fine_dirs[j];
                 let hs = me.knn_angle(d, k_a).0.clamp(me.h_min, me.h_max);
-                let hi = fixed.unwrap_or_else(|| me.knn_angle(d, k_i).0.clamp(me.h_min, me.hi_max));
+                let hi = fixed.unwrap_or_else(|| me.intensity_width(d));
                 (j, hs.max(hi), hi)
             })
             .collect();
@@ -281,10 +289,10 @@ impl Bandwidths {
             .par_iter()
             .map(|d| {
                 fixed.unwrap_or_else(|| {
-                    if me.knn_angle(*d, DARK_SHARE * k_i).0 > me.hi_max {
+                    if me.knn_angle(*d, DARK_SHARE * k_i).0 > me.hi_median {
                         me.dark_spacing_h
                     } else {
-                        me.knn_angle(*d, k_i).0.clamp(me.h_min, me.hi_max)
+                        me.intensity_width(*d)
                     }
                 })
             })
@@ -296,6 +304,20 @@ impl Bandwidths {
             ));
         }
         Ok(me)
+    }
+
+    /// The intensity half-width at `d` (rad): the k-nearest-neighbour angle holding k_I rays, but
+    /// past the flux-weighted median width only as far as holding [`MIN_INTENSITY_SHARE`] of k_I
+    /// needs, within [h_min, hi_max].
+    fn intensity_width(&self, d: DVec3) -> f64 {
+        let k = self.rays_per_intensity_kernel;
+        let h = self.knn_angle(d, k).0;
+        let h = if h > self.hi_median {
+            h.min(self.knn_angle(d, MIN_INTENSITY_SHARE * k).0.max(self.hi_median))
+        } else {
+            h
+        };
+        h.clamp(self.h_min, self.hi_max)
     }
 
     /// The k-nearest-neighbour angle about `d` holding `k` rays (rad), and the rays within the
@@ -495,11 +517,7 @@ impl Bandwidths {
                     .knn_angle(d, self.rays_per_angular_kernel)
                     .0
                     .clamp(self.h_min, self.h_max);
-                let hi = self.fixed_hi.unwrap_or_else(|| {
-                    self.knn_angle(d, self.rays_per_intensity_kernel)
-                        .0
-                        .clamp(self.h_min, self.hi_max)
-                });
+                let hi = self.fixed_hi.unwrap_or_else(|| self.intensity_width(d));
                 (j, hs.max(hi), hi)
             })
             .collect();
