@@ -45,7 +45,8 @@ const POOL_CAP: f64 = 3.0;
 
 /// A direction is dark where fewer than this share of an intensity kernel's rays lie within the
 /// median intensity width of it (its intensity is then under about 1 % of one at the median
-/// width's density); the layout spaces its cameras [`POOL_CAP`] median widths apart there.
+/// width's density); the layout spaces its cameras by the widest intensity width ([`POOL_CAP`]
+/// medians) there.
 /// Elsewhere they sit about 0.7 intensity widths apart: on a beam's flank the intensity falls by
 /// 10× within a few kernel widths, and cameras spaced for the dark side there read it 20 % high
 /// between them (the point source's 12.5° ring).
@@ -124,8 +125,6 @@ pub struct Bandwidths {
     hi_max: f64,
     /// The flux-weighted median of the k-nearest-neighbour intensity widths (rad).
     hi_median: f64,
-    /// The width the layout plans with in dark directions (rad).
-    dark_spacing_h: f64,
     /// A fixed intensity width (rad), where the user gave one.
     fixed_hi: Option<f64>,
     /// Effective rays, (Σ Φ)² / Σ Φ².
@@ -239,7 +238,6 @@ impl Bandwidths {
             cell_hi: Vec::new(),
             hi_max: PI / 2.0,
             hi_median: PI / 2.0,
-            dark_spacing_h: PI / 2.0,
             fixed_hi: opts.angular_kernel_deg.map(f64::to_radians),
             n_eff,
             flux_per_ray,
@@ -265,7 +263,6 @@ impl Bandwidths {
         me.h_max = cap(m_a, POOL_CAP);
         me.hi_max = cap(m_i, POOL_CAP).min(me.h_max);
         me.hi_median = m_i.clamp(me.h_min, me.hi_max);
-        me.dark_spacing_h = cap(m_i, POOL_CAP).min(me.h_max);
         let fixed = opts.angular_kernel_deg.map(f64::to_radians);
         let widths: Vec<(usize, f64, f64)> = me
             .lit
@@ -290,7 +287,7 @@ impl Bandwidths {
             .map(|d| {
                 fixed.unwrap_or_else(|| {
                     if me.knn_angle(*d, DARK_SHARE * k_i).0 > me.hi_median {
-                        me.dark_spacing_h
+                        me.hi_max
                     } else {
                         me.intensity_width(*d)
                     }

@@ -50,7 +50,7 @@ pub enum RayFlux {
 pub struct HeaderScale {
     /// Multiply every ray's flux by this.
     pub factor: f64,
-    /// The rays' sum and the header's total, in `unit`.
+    /// The rays' sum, in `unit`.
     pub rays_sum: f64,
     /// The header's total, in `unit`.
     pub header_total: f64,
