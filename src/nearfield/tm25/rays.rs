@@ -63,8 +63,8 @@ impl HeaderScale {
     pub fn describe(&self, path: &Path) -> String {
         format!(
             "{}: the rays' fluxes sum to {:.6} {u}, the header states {} {u}: the rays are scaled by {:.6e} to the \
-             header's total (TM-25 ray fluxes are relative where the header gives the total; the rays' own values \
-             are kept with `--ray-flux rays`)",
+             header's total (TM-25 ray fluxes are relative where the header gives the total: docs/formats.md, \
+             \"Absolute flux\"; `rays2scan --ray-flux rays` keeps the rays' values)",
             path.display(),
             self.rays_sum,
             self.header_total,
