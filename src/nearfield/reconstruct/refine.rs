@@ -29,7 +29,12 @@
 //!   where the light falls to half its inside value, as the cameras above 30° see it along each
 //!   rim vertex's outward in-plane direction (`snap_outline`): carving leaves the rim about a cell
 //!   out, and a capture pixel half on the source is half lit, so that rim drew light where there
-//!   is none.
+//!   is none. Where other light lies beyond the rim (a tile in front of a lit back plane), it goes
+//!   to the median of where each camera sees the step from the light inside to the light beyond
+//!   (`step_edge`).
+//! - A camera counts for a point only when the other parts of the mesh do not hide the point from
+//!   it (`Sight`): a tile in front of a back plane shows the cameras it hides the plane from its
+//!   own light, which is no evidence about the plane.
 //! - Distances are in units of the larger of the carving's cell and the capture pixel's footprint
 //!   at the centre (`unit_m`).
 //! - A part whose cameras are too few (fewer than 3 seeing it lit) or whose cost does not fall by
@@ -39,6 +44,7 @@ use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
 use super::mesh::{components, Mesh};
+use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::rayset::{Camera, Intrinsics, LuminanceImage};
 
 /// A part is flat within this RMS distance to its plane, in cells.
@@ -63,6 +69,13 @@ pub const MIN_GAIN: f64 = 0.02;
 /// An outline is snapped only where the light 3 units outside it is below this fraction of the
 /// light inside (an edge against darkness).
 pub const DARK_BEYOND: f64 = 0.1;
+
+/// Where other light lies beyond an outline, a camera sees a step there when its light inside and
+/// beyond differ by at least this fraction of the larger (the outline step's second case, [`refine_flat_parts`]).
+pub const STEP_CONTRAST: f64 = 0.3;
+
+/// ... and the outline is snapped when at least this many cameras see the step.
+pub const MIN_STEP_CAMERAS: usize = 5;
 
 /// A camera the refinement reads: pose, intrinsics and image.
 #[derive(Debug, Clone)]
@@ -103,7 +116,7 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
     }
     // Vertices used by triangles only (an unused vertex is its own part).
     let mut fits = Vec::new();
-    for part in parts.values() {
+    for (&id, part) in &parts {
         if part.len() < 16 {
             continue;
         }
@@ -149,7 +162,11 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
                 (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
             })
             .collect();
-        let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing);
+        // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
+        // back plane): those cameras see other light there and do not vote.
+        let sight = Sight::without(mesh, &comp, id, voxel_m);
+        let vis = sight.rows(&on_plane, &seeing);
+        let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing, &vis);
         for (&i, d) in idx.iter().zip(&dist) {
             mesh.vertices[i] -= (*d - offset_m) * normal;
         }
@@ -157,7 +174,7 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
         // source) go onto the plane too where the cameras agree better there than where they are.
         let mut absorbed = 0;
         let plane_pts: Vec<DVec3> = on_plane.iter().map(|p| *p + offset_m * normal).collect();
-        if let Some((means, lit)) = camera_means(&plane_pts, &seeing) {
+        if let Some((means, lit)) = camera_means(&plane_pts, &seeing, &vis) {
             let is_inlier: std::collections::HashSet<usize> = idx.iter().copied().collect();
             let outliers: Vec<usize> = part.iter().copied().filter(|i| !is_inlier.contains(i)).collect();
             let onto: Vec<Option<DVec3>> = outliers
@@ -165,8 +182,8 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
                 .map(|&i| {
                     let v = mesh.vertices[i];
                     let flat = v - ((v - centre).dot(normal) - offset_m) * normal;
-                    let there = point_disagreement(flat, &seeing, &means, &lit)?;
-                    match point_disagreement(v, &seeing, &means, &lit) {
+                    let there = point_disagreement(flat, &seeing, &means, &lit, &sight.row(flat, &seeing))?;
+                    match point_disagreement(v, &seeing, &means, &lit, &sight.row(v, &seeing)) {
                         Some(here) if here < there => None,
                         _ => Some(flat),
                     }
@@ -183,7 +200,7 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
                 .copied()
                 .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
                 .collect();
-            snap_outline(mesh, &on, (centre, normal), voxel_m, &seeing, &means, &lit);
+            snap_outline(mesh, &on, (centre, normal), voxel_m, (&seeing, &sight), &means, &lit);
         }
         fits.push(PlaneFit {
             absorbed,
@@ -212,7 +229,7 @@ fn snap_outline(
     on: &std::collections::HashSet<usize>,
     (centre, normal): (DVec3, DVec3),
     voxel_m: f64,
-    shots: &[&Shot],
+    (shots, sight): (&[&Shot], &Sight),
     means: &[f64],
     lit: &[usize],
 ) {
@@ -260,13 +277,6 @@ fn snap_outline(
             *outward.entry(v).or_insert(DVec3::ZERO) += u;
         }
     }
-    let profile = |p: DVec3| -> Option<f64> {
-        let vals: Vec<f64> = steep
-            .iter()
-            .filter_map(|&j| seen(shots[j], p).map(|v| v / means[j]))
-            .collect();
-        (vals.len() >= 3).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
-    };
     let moves: Vec<(u32, DVec3)> = outward
         .par_iter()
         .filter_map(|(&v, &u)| {
@@ -276,15 +286,31 @@ fn snap_outline(
             }
             let x = mesh.vertices[v as usize];
             let ts: Vec<f64> = (-30..=30).map(|k| f64::from(k) * 0.1 * voxel_m).collect();
-            let l: Vec<Option<f64>> = ts.iter().map(|t| profile(x + *t * u)).collect();
+            // Each steep camera's luminance over its mean along the line, and their mean.
+            let per: Vec<Vec<Option<f64>>> = steep
+                .iter()
+                .filter(|&&j| sight.clear(x, shots[j]))
+                .map(|&j| {
+                    ts.iter()
+                        .map(|t| seen(shots[j], x + *t * u).map(|v| v / means[j]))
+                        .collect()
+                })
+                .collect();
+            let l: Vec<Option<f64>> = (0..ts.len())
+                .map(|k| {
+                    let vals: Vec<f64> = per.iter().filter_map(|p| p[k]).collect();
+                    (vals.len() >= 3).then(|| vals.iter().sum::<f64>() / vals.len() as f64)
+                })
+                .collect();
             let inside = l[..=30].iter().flatten().copied().fold(0.0, f64::max);
             if inside <= 0.0 {
                 return None;
             }
-            // Only an edge against darkness: where other light lies beyond it (another part
-            // behind, seen past the edge) the fall to half is not this part's edge.
             if l[ts.len() - 1].is_none_or(|v| v > DARK_BEYOND * inside) {
-                return None;
+                // Other light lies beyond (another part behind, seen past the edge): each camera
+                // sees a step from this part's light to that light at the edge, wherever that
+                // light comes from.
+                return step_edge(&ts, &per).map(|t| (v, t * u));
             }
             let half = 0.5 * inside;
             let peak = l[..=30].iter().position(|v| *v == Some(inside))?;
@@ -302,6 +328,44 @@ fn snap_outline(
     for (v, d) in moves {
         mesh.vertices[v as usize] += d;
     }
+}
+
+/// Where a part's edge lies along a line across it when other light lies beyond it (a tile in front
+/// of a lit back plane): `per` holds each camera's luminance over its mean at the offsets `ts`
+/// (from 3 units inside to 3 outside, in steps of 0.1). A camera whose mean over the outer unit
+/// inside (`ts` ≤ −2 units) and over the outer unit beyond (≥ +2) differ by at least
+/// [`STEP_CONTRAST`] of the larger sees a step: its edge is where its profile first crosses the
+/// middle of the two, searching from 2 units inside to 2 outside. The edge is the median of those
+/// cameras' edges, when at least [`MIN_STEP_CAMERAS`] see one and they agree within a unit
+/// (interquartile range); `None` otherwise.
+fn step_edge(ts: &[f64], per: &[Vec<Option<f64>>]) -> Option<f64> {
+    let n = ts.len();
+    let (lo, hi) = (n / 6, n - 1 - n / 6);
+    let mean = |p: &[Option<f64>]| -> Option<f64> {
+        let v: Vec<f64> = p.iter().copied().collect::<Option<_>>()?;
+        Some(v.iter().sum::<f64>() / v.len() as f64)
+    };
+    let mut edges: Vec<f64> = per
+        .iter()
+        .filter_map(|p| {
+            let (a, b) = (mean(&p[..=lo])?, mean(&p[hi..])?);
+            if (a - b).abs() < STEP_CONTRAST * a.max(b) {
+                return None;
+            }
+            let mid = 0.5 * (a + b);
+            (lo..hi).find_map(|k| {
+                let (x, y) = (p[k]? - mid, p[k + 1]? - mid);
+                (x.signum() != y.signum()).then(|| ts[k] + (ts[k + 1] - ts[k]) * x / (x - y))
+            })
+        })
+        .collect();
+    if edges.len() < MIN_STEP_CAMERAS {
+        return None;
+    }
+    edges.sort_by(f64::total_cmp);
+    let q = |f: f64| edges[((edges.len() - 1) as f64 * f).round() as usize];
+    let unit = 10.0 * (ts[1] - ts[0]);
+    (q(0.75) - q(0.25) <= unit).then(|| q(0.5))
 }
 
 /// Centroid, unit normal (smallest principal axis) and the standard deviation along the largest
@@ -367,6 +431,48 @@ fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
     (values, values.map(vector))
 }
 
+/// Which cameras see a point of one part past the rest of the mesh.
+struct Sight {
+    /// The other parts' triangles; `None` when there are none.
+    others: Option<ProxyBvh>,
+    /// Segment parameters within this of either end do not count (the point's own surface, a
+    /// fraction of a unit from it, is not an occluder).
+    eps: f32,
+}
+
+impl Sight {
+    /// The occluders of part `id` (`comp` gives each vertex's part): every other part's triangles.
+    fn without(mesh: &Mesh, comp: &[u32], id: u32, voxel_m: f64) -> Self {
+        let soup: Vec<[f32; 3]> = mesh
+            .triangles
+            .iter()
+            .filter(|t| comp[t[0] as usize] != id)
+            .flat_map(|t| mesh.corners(t).map(|v| v.as_vec3().to_array()))
+            .collect();
+        Self {
+            others: ProxyBvh::build(&soup).ok(),
+            eps: (0.5 * voxel_m) as f32,
+        }
+    }
+
+    /// Whether camera `s` sees `p` past the other parts.
+    fn clear(&self, p: DVec3, s: &Shot) -> bool {
+        let Some(bvh) = &self.others else { return true };
+        let len = (s.camera.position_m - p).length().max(1e-9) as f32;
+        !bvh.occluded(p.as_vec3(), s.camera.position_m.as_vec3(), self.eps / len)
+    }
+
+    /// [`Self::clear`] for every camera of `shots`.
+    fn row(&self, p: DVec3, shots: &[&Shot]) -> Vec<bool> {
+        shots.iter().map(|s| self.clear(p, s)).collect()
+    }
+
+    /// [`Self::row`] for every point.
+    fn rows(&self, pts: &[DVec3], shots: &[&Shot]) -> Vec<Vec<bool>> {
+        pts.par_iter().map(|p| self.row(*p, shots)).collect()
+    }
+}
+
 /// Bilinear luminance at pixel coordinates (u, v) (pixel centres at +0.5), `None` outside.
 fn sample(img: &LuminanceImage, u: f64, v: f64) -> Option<f64> {
     let (x, y) = (u - 0.5, v - 0.5);
@@ -388,13 +494,15 @@ fn seen(s: &Shot, p: DVec3) -> Option<f64> {
 
 /// Each camera's mean luminance over `pts`, and which cameras see light there (a mean above 10⁻³
 /// of the brightest); `None` when fewer than 3 do.
-fn camera_means(pts: &[DVec3], shots: &[&Shot]) -> Option<(Vec<f64>, Vec<usize>)> {
-    let means: Vec<f64> = shots
-        .par_iter()
-        .map(|s| {
+fn camera_means(pts: &[DVec3], shots: &[&Shot], vis: &[Vec<bool>]) -> Option<(Vec<f64>, Vec<usize>)> {
+    let means: Vec<f64> = (0..shots.len())
+        .into_par_iter()
+        .map(|j| {
             let (sum, k) = pts
                 .iter()
-                .filter_map(|p| seen(s, *p))
+                .zip(vis)
+                .filter(|(_, row)| row[j])
+                .filter_map(|(p, _)| seen(shots[j], *p))
                 .fold((0.0, 0usize), |(a, k), v| (a + v, k + 1));
             if k == 0 {
                 0.0
@@ -410,9 +518,10 @@ fn camera_means(pts: &[DVec3], shots: &[&Shot]) -> Option<(Vec<f64>, Vec<usize>)
 
 /// The variance, across the cameras `lit`, of their luminance at `p` over their mean; `None` when
 /// fewer than 3 of them see `p`.
-fn point_disagreement(p: DVec3, shots: &[&Shot], means: &[f64], lit: &[usize]) -> Option<f64> {
+fn point_disagreement(p: DVec3, shots: &[&Shot], means: &[f64], lit: &[usize], vis: &[bool]) -> Option<f64> {
     let vals: Vec<f64> = lit
         .iter()
+        .filter(|&&j| vis[j])
         .filter_map(|&j| seen(shots[j], p).map(|v| v / means[j]))
         .collect();
     if vals.len() < 3 {
@@ -425,21 +534,22 @@ fn point_disagreement(p: DVec3, shots: &[&Shot], means: &[f64], lit: &[usize]) -
 /// The cameras' disagreement about the points `pts` moved by `dz` along `normal`: Σ over points
 /// (seen by at least 3 cameras) of the variance across cameras of the luminance over that camera's
 /// mean; `None` when fewer than 3 cameras see light.
-fn disagreement(pts: &[DVec3], normal: DVec3, dz: f64, shots: &[&Shot]) -> Option<f64> {
+fn disagreement(pts: &[DVec3], normal: DVec3, dz: f64, shots: &[&Shot], vis: &[Vec<bool>]) -> Option<f64> {
     let moved: Vec<DVec3> = pts.iter().map(|p| *p + dz * normal).collect();
-    let (means, lit) = camera_means(&moved, shots)?;
+    let (means, lit) = camera_means(&moved, shots, vis)?;
     Some(
         moved
             .par_iter()
-            .filter_map(|p| point_disagreement(*p, shots, &means, &lit))
+            .zip(vis)
+            .filter_map(|(p, row)| point_disagreement(*p, shots, &means, &lit, row))
             .sum(),
     )
 }
 
 /// The offset (m) in ±[`SEARCH_CELLS`] cells with the least disagreement, and the disagreement at 0
 /// and there; 0 when the cameras do not decide (see the module's promises).
-fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot]) -> (f64, [f64; 2]) {
-    let Some(at_zero) = disagreement(pts, normal, 0.0, shots) else {
+fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot], vis: &[Vec<bool>]) -> (f64, [f64; 2]) {
+    let Some(at_zero) = disagreement(pts, normal, 0.0, shots, vis) else {
         return (0.0, [0.0, 0.0]);
     };
     let mut best = (0.0, at_zero);
@@ -447,7 +557,7 @@ fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot]) -> (
     let n = (SEARCH_CELLS * voxel_m / coarse).round() as i64;
     for k in -n..=n {
         let dz = k as f64 * coarse;
-        if let Some(c) = disagreement(pts, normal, dz, shots) {
+        if let Some(c) = disagreement(pts, normal, dz, shots, vis) {
             if c < best.1 {
                 best = (dz, c);
             }
@@ -457,7 +567,7 @@ fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot]) -> (
     let centre = best.0;
     for k in -10..=10 {
         let dz = centre + k as f64 * fine;
-        if let Some(c) = disagreement(pts, normal, dz, shots) {
+        if let Some(c) = disagreement(pts, normal, dz, shots, vis) {
             if c < best.1 {
                 best = (dz, c);
             }
@@ -472,6 +582,7 @@ fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot]) -> (
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::nearfield::rayset::Camera;
 
     #[test]
     fn eigen_of_a_rotated_diagonal_matrix() {
@@ -486,5 +597,86 @@ mod tests {
         let mut s = values;
         s.sort_by(f64::total_cmp);
         assert!((s[0] - 1.0).abs() < 1e-9 && (s[2] - 9.0).abs() < 1e-9, "{s:?}");
+    }
+
+    /// Profiles from −3 to +3 units in steps of 0.1, each camera stepping at `edge` from `inside`
+    /// to `beyond` over one unit (a pixel's blur), `None` where `hidden`.
+    fn profile(edge: f64, inside: f64, beyond: f64) -> Vec<Option<f64>> {
+        (-30..=30)
+            .map(|k| {
+                let t = f64::from(k) * 0.1;
+                let w = (t - edge + 0.5).clamp(0.0, 1.0);
+                Some(inside + (beyond - inside) * w)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_step_edge_is_where_the_cameras_see_the_step() {
+        let ts: Vec<f64> = (-30..=30).map(|k| f64::from(k) * 0.1).collect();
+        // A tile (1.0) before a back plane whose light differs from camera to camera, some
+        // brighter, some darker, and one camera that sees no contrast.
+        let mut per: Vec<Vec<Option<f64>>> = [(0.4, 3.0), (0.35, 0.2), (0.45, 2.0), (0.4, 0.1), (0.4, 4.0), (0.3, 0.3)]
+            .iter()
+            .map(|&(e, b)| profile(e, 1.0, b))
+            .collect();
+        per.push(profile(0.4, 1.0, 1.05));
+        let e = step_edge(&ts, &per).expect("an edge");
+        assert!((e - 0.4).abs() < 0.06, "{e}");
+        // Too few cameras see a step, or they disagree by more than a unit: no edge.
+        assert_eq!(step_edge(&ts, &per[..4]), None);
+        let scattered: Vec<Vec<Option<f64>>> = [-1.8, -1.0, 0.0, 1.0, 1.8, -1.5]
+            .iter()
+            .map(|&e| profile(e, 1.0, 3.0))
+            .collect();
+        assert_eq!(step_edge(&ts, &scattered), None);
+        // A camera whose image does not hold the whole line inside (its mean there is unknown)
+        // does not count.
+        let mut gaps = per.clone();
+        for p in &mut gaps[..2] {
+            p[5] = None;
+        }
+        assert_eq!(step_edge(&ts, &gaps[..6]), None);
+    }
+
+    #[test]
+    fn a_part_behind_another_is_hidden_from_the_cameras_it_lies_behind() {
+        // Part 0: a square at z = 0; part 1: a square at z = 0.05 behind it (cameras at z < 0).
+        let square = |z: f64, h: f64| -> Vec<DVec3> {
+            vec![
+                DVec3::new(-h, -h, z),
+                DVec3::new(h, -h, z),
+                DVec3::new(h, h, z),
+                DVec3::new(-h, h, z),
+            ]
+        };
+        let mut vertices = square(0.0, 0.02);
+        vertices.extend(square(0.05, 0.1));
+        let mesh = Mesh {
+            vertices,
+            triangles: vec![[0, 1, 2], [0, 2, 3], [4, 5, 6], [4, 6, 7]],
+        };
+        let comp = components(&mesh);
+        assert_ne!(comp[0], comp[4]);
+        let shot = |eye: DVec3| Shot {
+            camera: Camera::looking_at(eye, DVec3::ZERO, "test"),
+            intrinsics: Intrinsics {
+                width: 8,
+                height: 8,
+                principal_px: glam::DVec2::splat(4.0),
+                focal_px: glam::DVec2::splat(8.0),
+            },
+            image: LuminanceImage::zeros(8, 8),
+        };
+        let below = shot(DVec3::new(0.0, 0.0, -1.0));
+        let aside = shot(DVec3::new(1.0, 0.0, -0.3));
+        let back = Sight::without(&mesh, &comp, comp[4], 0.001);
+        let p = DVec3::new(0.0, 0.0, 0.05);
+        assert!(!back.clear(p, &below), "the front square hides the back one's middle");
+        assert!(back.clear(p, &aside));
+        assert!(back.clear(DVec3::new(0.08, 0.0, 0.05), &below));
+        // The front square is in front of everything: no camera is hidden from it by the back.
+        let front = Sight::without(&mesh, &comp, comp[0], 0.001);
+        assert!(front.clear(DVec3::ZERO, &below) && front.clear(DVec3::ZERO, &aside));
     }
 }
