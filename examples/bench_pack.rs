@@ -3,13 +3,17 @@
 //! ```text
 //! bench_pack footprint  [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc] --out FILE
 //! bench_pack throughput --images N [--size 1216x1021] [--luminaire disc] --dir DIR
+//! bench_pack reconstruct [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc]
 //! ```
 //!
 //! `footprint` renders a synthetic scan (the synthetic goniophotometer; `--images N` takes N cameras
 //! spread evenly over the layout) and streams it into a pack; `throughput` writes N `.pf` files once
 //! (manifest + images), then times a plain parallel read-and-sum pass over them, packing them from
-//! the manifest, a second read pass and a CSR encoding pass. Each prints one JSON object, with the
-//! process's peak resident memory (VmHWM) at the end.
+//! the manifest, a second read pass and a CSR encoding pass; `reconstruct` reconstructs the proxy
+//! of the same synthetic scan as `footprint` renders it, as `lumiview pack` does for a scan given
+//! without one (`reconstruct::scan_proxy`, default options; the images it reads are rendered on
+//! demand, as `footprint`'s are). Each prints one JSON object, with the process's peak resident
+//! memory (VmHWM) at the end.
 
 use std::error::Error;
 use std::path::PathBuf;
@@ -70,7 +74,9 @@ struct Args {
 
 fn parse_args() -> Res<Args> {
     let mut it = std::env::args().skip(1);
-    let mode = it.next().ok_or("usage: bench_pack footprint|throughput [options]")?;
+    let mode = it
+        .next()
+        .ok_or("usage: bench_pack footprint|throughput|reconstruct [options]")?;
     let mut a = Args {
         mode,
         layout: "rigo:28000".into(),
@@ -168,6 +174,42 @@ fn footprint(a: &Args) -> Res<serde_json::Value> {
     Ok(v)
 }
 
+fn reconstruct(a: &Args) -> Res<serde_json::Value> {
+    let scan = synth(a)?;
+    let t = Instant::now();
+    let last = std::sync::Mutex::new(Instant::now());
+    let progress = |stage: &str, done: usize, total: usize| {
+        let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
+        if done == total || done == 0 || l.elapsed().as_secs_f64() > 10.0 {
+            *l = Instant::now();
+            eprintln!(
+                "bench_pack: reconstruct: {stage} {done}/{total} (peak {:.0} MiB)",
+                vm_hwm_kib() as f64 / 1024.0
+            );
+        }
+    };
+    let mut warnings = Vec::new();
+    let rec = lumiview::nearfield::reconstruct::scan_proxy(&scan, &a.luminaire, &progress, &mut warnings)?;
+    let secs = t.elapsed().as_secs_f64();
+    let mut v = json!({
+        "mode": "reconstruct", "layout": a.layout, "size": [a.size.0, a.size.1],
+        "images": scan.set.cameras.len(), "reconstruct_s": secs, "kept": rec.is_some(),
+        "warnings": warnings, "vm_hwm_kib": vm_hwm_kib(),
+    });
+    if let Some(r) = rec {
+        let r = r.report;
+        v["cameras_read"] = json!(r.cameras_read);
+        v["seconds"] =
+            json!({"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2], "refining": r.seconds[3]});
+        v["voxel_mm"] = json!(r.voxel_m * 1e3);
+        v["triangles"] = json!(r.triangles);
+        v["coverage"] = json!(r.coverage);
+        v["mask_bytes"] = json!(r.mask_bytes);
+        v["refine_cameras"] = json!(r.flat_parts.first().map(|f| f.cameras));
+    }
+    Ok(v)
+}
+
 /// Reads every image in parallel and sums its pixels (the baseline pass).
 fn read_pass(files: &[PathBuf]) -> Res<(f64, f64)> {
     let t = Instant::now();
@@ -244,7 +286,8 @@ fn main() -> ExitCode {
         let v = match a.mode.as_str() {
             "footprint" => footprint(&a)?,
             "throughput" => throughput(&a)?,
-            m => return Err(format!("unknown mode {m}: footprint or throughput").into()),
+            "reconstruct" => reconstruct(&a)?,
+            m => return Err(format!("unknown mode {m}: footprint, throughput or reconstruct").into()),
         };
         println!("{v}");
         Ok(())

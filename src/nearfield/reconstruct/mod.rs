@@ -29,19 +29,24 @@
 //! 5. **Flat parts** ([`refine`]): each part that is flat within a cell is put on the plane its
 //!    cameras' images agree on (luminance consistency), with the vertices of a lens in front of it
 //!    that the cameras see better on the plane.
-//! 6. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
+//! 6. **Lean flat parts** ([`simplify`]): one of each flat part's two coplanar sheets, and only the
+//!    triangles its outline needs.
+//! 7. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
 //!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
 //!    light it misses).
 //!
 //! Luminance consistency is used for flat parts only: a curved emitter keeps its carved surface,
-//! about a cell off, and what is hidden behind a lit surface from every camera is filled in. Pure CPU, both cores (rayon); memory is the masks (a few tens of KB per
-//! camera) plus one byte per finest cell.
+//! about a cell off, and what is hidden behind a lit surface from every camera is filled in. Pure
+//! CPU, both cores (rayon); memory is the masks (a few tens of KB per camera), one byte per finest
+//! cell, one octree level's split cells and the refinement's cropped images (at most
+//! [`REFINE_PIXELS`]), whatever the number of images.
 
 pub mod carve;
 pub mod hemisphere;
 pub mod mask;
 pub mod mesh;
 pub mod refine;
+pub mod simplify;
 
 use std::time::Instant;
 
@@ -50,7 +55,7 @@ use rayon::prelude::*;
 
 use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::pack::PackProxy;
-use crate::nearfield::rayset::{LuminanceImage, RayImageSet, Scan};
+use crate::nearfield::rayset::{Intrinsics, LuminanceImage, RayImageSet, Scan};
 
 pub use carve::{Occupancy, View};
 pub use mask::LitMask;
@@ -82,6 +87,9 @@ pub struct ReconstructOptions {
     pub directional_fallback: bool,
     /// Move flat parts onto the plane the cameras agree on ([`refine`]); default true.
     pub refine_flat: bool,
+    /// Then keep one sheet of each flat part and only the triangles its outline needs
+    /// ([`simplify`]); default true.
+    pub simplify: bool,
 }
 
 impl Default for ReconstructOptions {
@@ -95,6 +103,7 @@ impl Default for ReconstructOptions {
             thin_fraction: 0.05,
             directional_fallback: false,
             refine_flat: true,
+            simplify: true,
         }
     }
 }
@@ -175,8 +184,11 @@ pub struct ReconstructReport {
     pub directional: bool,
     /// The flat parts moved onto the plane their cameras agree on ([`refine`]), one entry each.
     pub flat_parts: Vec<refine::PlaneFit>,
-    /// Seconds reading images and building masks, carving, meshing.
-    pub seconds: [f64; 3],
+    /// What [`simplify`] did (triangles before, second sheets dropped, vertices collapsed).
+    pub simplified: simplify::Simplified,
+    /// Seconds reading images and building masks, carving, meshing, refining and simplifying flat
+    /// parts (reading their images again included).
+    pub seconds: [f64; 4],
 }
 
 /// A reconstructed proxy.
@@ -400,24 +412,49 @@ pub fn reconstruct(
         collapsed_coverage,
         stray_triangles,
     } = best;
+    let cameras_used = views.len();
+    drop(views);
     // Flat parts onto the plane the images agree on, from up to REFINE_CAMERAS cameras spread over
     // the sphere (read again: the masks kept no luminance), within REFINE_PIXELS.
+    let t_refine = Instant::now();
     let flat_parts = if opts.refine_flat && !mesh.triangles.is_empty() {
-        // At most REFINE_PIXELS pixels held (a full-size image is 1.24 M), at least 16 cameras.
-        let px = set.intrinsics.pixel_count().max(1);
-        let count = (REFINE_PIXELS / px).clamp(16, REFINE_CAMERAS);
-        let picks: Vec<usize> = carve::spread_order(chosen.len())
+        // Each image cut to where the mesh's box (grown by the refinement's reach) projects; at most
+        // REFINE_PIXELS pixels held together (a full-size image is 1.24 M), at least 16 cameras.
+        let reach = 4.0 * occupancy.voxel_m.max(footprint);
+        let (lo, hi) = mesh.vertices.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), v| (lo.min(*v), hi.max(*v)),
+        );
+        let bounds = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+        let mut held = 0usize;
+        let picks: Vec<(usize, [u32; 4])> = carve::spread_order(chosen.len())
             .into_iter()
-            .take(count)
             .map(|k| chosen[k])
+            .map(|i| (i, box_crop(set, i, bounds)))
+            .take_while(|(_, [c0, c1, r0, r1])| {
+                held += (c1 - c0) as usize * (r1 - r0) as usize;
+                held <= REFINE_PIXELS
+            })
+            .take(REFINE_CAMERAS)
             .collect();
+        let picks = if picks.len() >= 16 {
+            picks
+        } else {
+            let order = carve::spread_order(chosen.len());
+            order
+                .into_iter()
+                .take(16)
+                .map(|k| (chosen[k], box_crop(set, chosen[k], bounds)))
+                .collect()
+        };
         let shots: Vec<refine::Shot> = picks
             .par_iter()
-            .map(|&i| {
+            .map(|&(i, crop)| {
+                let (intrinsics, image) = cropped(set.intrinsics_of(i), &image(i)?, crop);
                 Ok(refine::Shot {
                     camera: set.cameras[i].clone(),
-                    intrinsics: *set.intrinsics_of(i),
-                    image: image(i)?,
+                    intrinsics,
+                    image,
                 })
             })
             .collect::<Result<_>>()?;
@@ -428,9 +465,17 @@ pub fn reconstruct(
     } else {
         Vec::new()
     };
+    let simplified = if opts.simplify {
+        let planes: Vec<(DVec3, DVec3)> = flat_parts.iter().map(|f| (f.point_m, f.normal)).collect();
+        let (lean, s) = simplify::simplify_flat(&mesh, &planes, occupancy.voxel_m.max(footprint));
+        mesh = lean;
+        s
+    } else {
+        simplify::Simplified::default()
+    };
     let report = ReconstructReport {
         cameras_read: chosen.len(),
-        cameras_used: views.len(),
+        cameras_used,
         content_radius_m: content,
         voxel_m: occupancy.voxel_m,
         cells_per_axis: occupancy.n,
@@ -444,7 +489,13 @@ pub fn reconstruct(
         stray_triangles,
         directional: rule == carve::Rule::Directional,
         flat_parts,
-        seconds: [(t1 - t0).as_secs_f64(), carve_s, mesh_s],
+        simplified,
+        seconds: [
+            (t1 - t0).as_secs_f64(),
+            carve_s,
+            mesh_s,
+            t_refine.elapsed().as_secs_f64(),
+        ],
     };
     Ok(Reconstruction {
         mesh,
@@ -453,11 +504,63 @@ pub fn reconstruct(
     })
 }
 
+/// The pixels `[c0, c1) × [r0, r1)` of camera `i`'s image that can show the box `(lo, hi)`
+/// (luminaire frame, m): the box of the projections of its corners, one pixel wider each way; the
+/// whole image when a corner is behind the camera.
+fn box_crop(set: &RayImageSet, i: usize, (lo, hi): (DVec3, DVec3)) -> [u32; 4] {
+    let k = set.intrinsics_of(i);
+    let cam = &set.cameras[i];
+    let whole = [0, k.width, 0, k.height];
+    let (mut a, mut b) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
+    for c in 0..8 {
+        let corner = DVec3::new(
+            if c & 1 == 0 { lo.x } else { hi.x },
+            if c & 2 == 0 { lo.y } else { hi.y },
+            if c & 4 == 0 { lo.z } else { hi.z },
+        );
+        let Some(uv) = k.project(cam.to_camera(corner - cam.position_m)) else {
+            return whole;
+        };
+        (a, b) = (a.min(uv), b.max(uv));
+    }
+    let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as u32;
+    let c = [
+        clamp(a.x.floor() - 1.0, k.width),
+        clamp(b.x.ceil() + 1.0, k.width),
+        clamp(a.y.floor() - 1.0, k.height),
+        clamp(b.y.ceil() + 1.0, k.height),
+    ];
+    if c[0] >= c[1] || c[2] >= c[3] {
+        // The content is outside this camera's view: keep one pixel (it sees none of it).
+        return [0, 1, 0, 1];
+    }
+    c
+}
+
+/// `img` (taken with `k`) cut to `[c0, c1) × [r0, r1)`, with the intrinsics of the cut image.
+fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> (Intrinsics, LuminanceImage) {
+    let (c1, r1) = (c1.min(img.width), r1.min(img.height));
+    let (c0, r0) = (c0.min(c1.saturating_sub(1)), r0.min(r1.saturating_sub(1)));
+    let mut out = LuminanceImage::zeros(c1 - c0, r1 - r0);
+    for r in r0..r1 {
+        let src = (r * img.width + c0) as usize..(r * img.width + c1) as usize;
+        let dst = ((r - r0) * out.width) as usize..((r - r0 + 1) * out.width) as usize;
+        out.data[dst].copy_from_slice(&img.data[src]);
+    }
+    let k = Intrinsics {
+        width: out.width,
+        height: out.height,
+        principal_px: k.principal_px - glam::DVec2::new(f64::from(c0), f64::from(r0)),
+        focal_px: k.focal_px,
+    };
+    (k, out)
+}
+
 /// Cameras read again for [`refine`], at most ...
 pub const REFINE_CAMERAS: usize = 64;
-/// ... and as many as hold at most this many pixels together (128 MiB of f32; 27 full-size
-/// 1216 × 1021 images), but at least 16.
-pub const REFINE_PIXELS: usize = 1 << 25;
+/// ... and as many as hold at most this many pixels together (each image cut to where the content
+/// can be; 128 MiB of f32, 27 whole full-size 1216 × 1021 images), but at least 16.
+pub const REFINE_PIXELS: usize = 1 << 23;
 
 /// One carving rule's result, meshed and checked.
 struct Attempt {

@@ -31,7 +31,9 @@
 //!   out, and a capture pixel half on the source is half lit, so that rim drew light where there
 //!   is none. Where other light lies beyond the rim (a tile in front of a lit back plane), it goes
 //!   to the median of where each camera sees the step from the light inside to the light beyond
-//!   (`step_edge`).
+//!   (`step_edge`). The moves are averaged with the outline neighbours' moves
+//!   ([`OUTLINE_SMOOTHING_PASSES`]), and the sheet's vertices left beyond the new outline (within 3
+//!   units, behind a moved outline vertex) are pulled back onto it.
 //! - A camera counts for a point only when the other parts of the mesh do not hide the point from
 //!   it (`Sight`): a tile in front of a back plane shows the cameras it hides the plane from its
 //!   own light, which is no evidence about the plane.
@@ -103,6 +105,10 @@ pub struct PlaneFit {
     pub cost: [f64; 2],
     /// Cameras consulted.
     pub cameras: usize,
+    /// A point of the plane the part was put on (m, luminaire frame).
+    pub point_m: DVec3,
+    /// The plane's unit normal.
+    pub normal: DVec3,
 }
 
 /// Flattens every flat part of `mesh` onto the plane its cameras agree on and snaps its outline
@@ -209,6 +215,8 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
             offset_m,
             cost,
             cameras: seeing.len(),
+            point_m: centre + offset_m * normal,
+            normal,
         });
     }
     fits
@@ -263,10 +271,13 @@ fn snap_outline(
         }
     }
     let mut outward: HashMap<u32, DVec3> = HashMap::new();
+    let mut along: HashMap<u32, Vec<u32>> = HashMap::new();
     for ((p, q), tris) in &edges {
         if tris.len() != 2 || tris[0].0 == tris[1].0 {
             continue;
         }
+        along.entry(*p).or_default().push(*q);
+        along.entry(*q).or_default().push(*p);
         let (vp, vq) = (mesh.vertices[*p as usize], mesh.vertices[*q as usize]);
         let mut u = normal.cross(vq - vp).normalize_or_zero();
         let inner = mesh.vertices[tris[0].1 as usize] - 0.5 * (vp + vq);
@@ -275,6 +286,16 @@ fn snap_outline(
         }
         for v in [*p, *q] {
             *outward.entry(v).or_insert(DVec3::ZERO) += u;
+        }
+    }
+    // Neighbours on the plane.
+    let mut around: HashMap<u32, Vec<u32>> = HashMap::new();
+    for t in &mesh.triangles {
+        if t.iter().all(|&i| on.contains(&(i as usize))) {
+            for k in 0..3 {
+                around.entry(t[k]).or_default().push(t[(k + 1) % 3]);
+                around.entry(t[(k + 1) % 3]).or_default().push(t[k]);
+            }
         }
     }
     let moves: Vec<(u32, DVec3)> = outward
@@ -325,10 +346,79 @@ fn snap_outline(
             None
         })
         .collect();
+    // Each vertex's edge comes from a few dozen cameras' pixels and is noisy by about a quarter of
+    // a unit: the moves are averaged with the outline neighbours' (twice), as a straight edge's are
+    // alike.
+    let mut moves: HashMap<u32, DVec3> = moves.into_iter().collect();
+    for _ in 0..OUTLINE_SMOOTHING_PASSES {
+        moves = moves
+            .keys()
+            .map(|&v| {
+                let near = along.get(&v).into_iter().flatten().filter_map(|w| moves.get(w));
+                let (sum, k) = near.fold((moves[&v], 1.0), |(s, k), d| (s + *d, k + 1.0));
+                (v, sum / k)
+            })
+            .collect();
+    }
+    // The sheet's vertices next to the outline may now lie beyond it (carving left the rim a cell
+    // out, with a ring of vertices between the old rim and the new one): each on-plane vertex within
+    // 3 units of an outline vertex that moved inwards, behind it along the outline's outward
+    // direction there (the mean over it and its outline neighbours two steps either way; within a
+    // unit of that line), is pulled back onto the new outline, by at most as far as the outline
+    // vertex moved.
+    let mut pull: HashMap<u32, f64> = HashMap::new();
+    let mut pull_dir: HashMap<u32, DVec3> = HashMap::new();
+    for (&v, d) in &moves {
+        let mut u = outward[&v].normalize_or_zero();
+        for w in along.get(&v).into_iter().flatten() {
+            u += outward[w].normalize_or_zero();
+            for x in along.get(w).into_iter().flatten() {
+                u += outward[x].normalize_or_zero();
+            }
+        }
+        let u = u.normalize_or_zero();
+        let inwards = -d.dot(u);
+        if u == DVec3::ZERO || inwards <= 0.0 {
+            continue;
+        }
+        let (old, new) = (mesh.vertices[v as usize], mesh.vertices[v as usize] + *d);
+        let mut seen = std::collections::HashSet::from([v]);
+        let mut ring = vec![v];
+        while !ring.is_empty() {
+            let mut next = Vec::new();
+            for x in ring {
+                for &w in around.get(&x).into_iter().flatten() {
+                    if !seen.insert(w) || moves.contains_key(&w) {
+                        continue;
+                    }
+                    let p = mesh.vertices[w as usize];
+                    if (p - old).length() > 3.0 * voxel_m {
+                        continue;
+                    }
+                    next.push(w);
+                    let e = (p - new).dot(u);
+                    let aside = ((p - new) - e * u).length();
+                    let e = e.min(inwards);
+                    if e > 0.0 && aside <= voxel_m && pull.get(&w).is_none_or(|x| e > *x) {
+                        pull.insert(w, e);
+                        pull_dir.insert(w, u);
+                    }
+                }
+            }
+            ring = next;
+        }
+    }
     for (v, d) in moves {
         mesh.vertices[v as usize] += d;
     }
+    for (w, e) in pull {
+        mesh.vertices[w as usize] -= e * pull_dir[&w];
+    }
 }
+
+/// Passes of averaging an outline vertex's move with its outline neighbours' ([`refine_flat_parts`]'s
+/// outline step).
+pub const OUTLINE_SMOOTHING_PASSES: usize = 2;
 
 /// Where a part's edge lies along a line across it when other light lies beyond it (a tile in front
 /// of a lit back plane): `per` holds each camera's luminance over its mean at the offsets `ts`

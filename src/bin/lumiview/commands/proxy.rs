@@ -67,6 +67,9 @@ pub struct ProxyArgs {
     /// Leave flat parts where carving put them (no plane from luminance consistency).
     #[arg(long)]
     pub no_refine: bool,
+    /// Keep both sheets of each flat part and all their triangles (no simplification).
+    #[arg(long)]
+    pub no_simplify: bool,
     /// No progress bar.
     #[arg(long)]
     pub quiet: bool,
@@ -84,6 +87,7 @@ impl ProxyArgs {
             thin_fraction: self.thin_fraction,
             directional_fallback: self.directional,
             refine_flat: !self.no_refine,
+            simplify: !self.no_simplify,
             ..ReconstructOptions::default()
         }
     }
@@ -160,7 +164,12 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
             "disagreement": f.cost,
             "cameras": f.cameras,
         })).collect::<Vec<_>>(),
-        "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2]},
+        "simplified": {
+            "triangles_before": r.simplified.triangles_before,
+            "sheet_triangles_dropped": r.simplified.sheet_triangles_dropped,
+            "vertices_collapsed": r.simplified.vertices_collapsed,
+        },
+        "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2], "refining": r.seconds[3]},
     })
 }
 
