@@ -241,7 +241,9 @@ fn snap_outline(
     means: &[f64],
     lit: &[usize],
 ) {
-    use std::collections::HashMap;
+    // Ordered maps: the sums below (outward directions, averaged moves) then add in the same order
+    // on every run, and so does the simplification that follows (a reconstruction is reproducible).
+    use std::collections::BTreeMap;
     let steep: Vec<usize> = lit
         .iter()
         .copied()
@@ -254,7 +256,7 @@ fn snap_outline(
         return;
     }
     // Edges of the part's triangles: (facing sign, third vertex) per triangle.
-    let mut edges: HashMap<(u32, u32), Vec<(f64, u32)>> = HashMap::new();
+    let mut edges: BTreeMap<(u32, u32), Vec<(f64, u32)>> = BTreeMap::new();
     for t in &mesh.triangles {
         if !t.iter().all(|&i| on.contains(&(i as usize))) {
             continue;
@@ -270,8 +272,8 @@ fn snap_outline(
             edges.entry((p.min(q), p.max(q))).or_default().push((sign, r));
         }
     }
-    let mut outward: HashMap<u32, DVec3> = HashMap::new();
-    let mut along: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut outward: BTreeMap<u32, DVec3> = BTreeMap::new();
+    let mut along: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for ((p, q), tris) in &edges {
         if tris.len() != 2 || tris[0].0 == tris[1].0 {
             continue;
@@ -289,7 +291,7 @@ fn snap_outline(
         }
     }
     // Neighbours on the plane.
-    let mut around: HashMap<u32, Vec<u32>> = HashMap::new();
+    let mut around: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
     for t in &mesh.triangles {
         if t.iter().all(|&i| on.contains(&(i as usize))) {
             for k in 0..3 {
@@ -349,7 +351,7 @@ fn snap_outline(
     // Each vertex's edge comes from a few dozen cameras' pixels and is noisy by about a quarter of
     // a unit: the moves are averaged with the outline neighbours' (twice), as a straight edge's are
     // alike.
-    let mut moves: HashMap<u32, DVec3> = moves.into_iter().collect();
+    let mut moves: BTreeMap<u32, DVec3> = moves.into_iter().collect();
     for _ in 0..OUTLINE_SMOOTHING_PASSES {
         moves = moves
             .keys()
@@ -366,8 +368,8 @@ fn snap_outline(
     // direction there (the mean over it and its outline neighbours two steps either way; within a
     // unit of that line), is pulled back onto the new outline, by at most as far as the outline
     // vertex moved.
-    let mut pull: HashMap<u32, f64> = HashMap::new();
-    let mut pull_dir: HashMap<u32, DVec3> = HashMap::new();
+    let mut pull: BTreeMap<u32, f64> = BTreeMap::new();
+    let mut pull_dir: BTreeMap<u32, DVec3> = BTreeMap::new();
     for (&v, d) in &moves {
         let mut u = outward[&v].normalize_or_zero();
         for w in along.get(&v).into_iter().flatten() {
