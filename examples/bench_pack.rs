@@ -205,7 +205,6 @@ fn reconstruct(a: &Args) -> Res<serde_json::Value> {
         v["triangles"] = json!(r.triangles);
         v["coverage"] = json!(r.coverage);
         v["mask_bytes"] = json!(r.mask_bytes);
-        v["refine_cameras"] = json!(r.flat_parts.first().map(|f| f.cameras));
     }
     Ok(v)
 }

@@ -639,19 +639,25 @@ pub fn without_small_components(mesh: &Mesh, min_fraction: f64) -> (Mesh, usize)
         .filter(|t| size[component[t[0] as usize] as usize] >= min)
         .collect();
     let dropped = mesh.triangles.len() - kept.len();
-    let mut index = vec![u32::MAX; n];
+    (compacted(&mesh.vertices, kept), dropped)
+}
+
+/// The mesh of `triangles` (indices into `vertices`) with only the vertices they use, renumbered
+/// in the order the triangles first use them.
+pub fn compacted(vertices: &[DVec3], triangles: impl IntoIterator<Item = [u32; 3]>) -> Mesh {
+    let mut index = vec![u32::MAX; vertices.len()];
     let mut out = Mesh::default();
-    for t in &kept {
+    for t in triangles {
         let t = t.map(|v| {
             if index[v as usize] == u32::MAX {
                 index[v as usize] = out.vertices.len() as u32;
-                out.vertices.push(mesh.vertices[v as usize]);
+                out.vertices.push(vertices[v as usize]);
             }
             index[v as usize]
         });
         out.triangles.push(t);
     }
-    (out, dropped)
+    out
 }
 
 /// The cells of `occ`'s grid that `mesh` passes through (each triangle sampled every quarter cell),

@@ -360,22 +360,14 @@ impl<'a> Decimator<'a> {
 
     /// The mesh of the alive triangles, unused vertices dropped.
     fn finish(self) -> Mesh {
-        let mut index = vec![u32::MAX; self.vertices.len()];
-        let mut out = Mesh::default();
-        for (t, alive) in self.triangles.iter().zip(&self.alive) {
-            if !alive {
-                continue;
-            }
-            let t = t.map(|v| {
-                if index[v as usize] == u32::MAX {
-                    index[v as usize] = out.vertices.len() as u32;
-                    out.vertices.push(self.vertices[v as usize]);
-                }
-                index[v as usize]
-            });
-            out.triangles.push(t);
-        }
-        out
+        let alive = self.alive;
+        let kept = self
+            .triangles
+            .into_iter()
+            .zip(alive)
+            .filter(|(_, a)| *a)
+            .map(|(t, _)| t);
+        super::mesh::compacted(self.vertices, kept)
     }
 }
 
