@@ -29,8 +29,7 @@
 //! 5. **Flat parts** ([`refine`]): each part that is flat within a cell is put on the plane its
 //!    cameras' images agree on (luminance consistency), with the vertices of a lens in front of it
 //!    that the cameras see better on the plane.
-//! 6. **Lean flat parts** ([`simplify`]): one of each flat part's two coplanar sheets, and only the
-//!    triangles its outline needs.
+//! 6. **Lean flat parts** ([`simplify`]): only the triangles each flat part's outline needs.
 //! 7. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
 //!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
 //!    light it misses).
@@ -87,8 +86,7 @@ pub struct ReconstructOptions {
     pub directional_fallback: bool,
     /// Move flat parts onto the plane the cameras agree on ([`refine`]); default true.
     pub refine_flat: bool,
-    /// Then keep one sheet of each flat part and only the triangles its outline needs
-    /// ([`simplify`]); default true.
+    /// Then keep only the triangles each flat part's outline needs ([`simplify`]); default true.
     pub simplify: bool,
 }
 
@@ -184,7 +182,7 @@ pub struct ReconstructReport {
     pub directional: bool,
     /// The flat parts moved onto the plane their cameras agree on ([`refine`]), one entry each.
     pub flat_parts: Vec<refine::PlaneFit>,
-    /// What [`simplify`] did (triangles before, second sheets dropped, vertices collapsed).
+    /// What [`simplify`] did (triangles before, vertices collapsed).
     pub simplified: simplify::Simplified,
     /// Seconds reading images and building masks, carving, meshing, refining and simplifying flat
     /// parts (reading their images again included).

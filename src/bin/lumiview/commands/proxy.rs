@@ -166,7 +166,6 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         })).collect::<Vec<_>>(),
         "simplified": {
             "triangles_before": r.simplified.triangles_before,
-            "sheet_triangles_dropped": r.simplified.sheet_triangles_dropped,
             "vertices_collapsed": r.simplified.vertices_collapsed,
         },
         "seconds": {"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2], "refining": r.seconds[3]},
