@@ -272,19 +272,16 @@ pub fn carve(
     // Cells (packed by `pack`) of the level before that were split: their children are judged now.
     // Children are made a chunk of parents at a time, so memory holds the undecided cells of one
     // level (the finest level's children, 9 million for a 200 mm disc at 1.1 mm cells, are never
-    // all held).
-    let mut parents: Vec<u32> = Vec::new();
+    // all held). Level 0's cells are the children of a coarser level of BASE_CELLS / 2 per axis.
+    let half = (BASE_CELLS / 2) as u32;
+    let mut parents: Vec<u32> = (0..half * half * half)
+        .map(|i| pack([i % half, i / half % half, i / (half * half)]))
+        .collect();
     for level in 0..=levels {
         let size = 2.0 * half_m / (BASE_CELLS << level) as f64;
         let finest = level == levels;
         let scale = 1usize << (levels - level);
-        let base: Vec<Vec<u32>> = if level == 0 {
-            let b = BASE_CELLS as u32;
-            vec![(0..b * b * b).map(|i| pack([i % b, i / b % b, i / (b * b)])).collect()]
-        } else {
-            Vec::new()
-        };
-        let groups = base.into_iter().chain(parents.chunks(PARENTS_PER_CHUNK).map(|chunk| {
+        let groups = parents.chunks(PARENTS_PER_CHUNK).map(|chunk| {
             chunk
                 .iter()
                 .flat_map(|&p| {
@@ -292,7 +289,7 @@ pub fn carve(
                     (0..8u32).map(move |k| pack([2 * x + (k & 1), 2 * y + ((k >> 1) & 1), 2 * z + (k >> 2)]))
                 })
                 .collect::<Vec<u32>>()
-        }));
+        });
         let mut next = Vec::new();
         for cells_now in groups {
             let judged: Vec<(u32, Option<bool>, u64)> = cells_now

@@ -55,6 +55,7 @@ use rayon::prelude::*;
 use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::pack::PackProxy;
 use crate::nearfield::rayset::{Intrinsics, LuminanceImage, RayImageSet, Scan};
+use crate::nearfield::synth::{pixel_bounds, Aabb};
 
 pub use carve::{Occupancy, View};
 pub use mask::LitMask;
@@ -423,12 +424,15 @@ pub fn reconstruct(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), v| (lo.min(*v), hi.max(*v)),
         );
-        let bounds = (lo - DVec3::splat(reach), hi + DVec3::splat(reach));
+        let bounds = Aabb {
+            min: lo - DVec3::splat(reach),
+            max: hi + DVec3::splat(reach),
+        };
         let mut held = 0usize;
         let picks: Vec<(usize, [u32; 4])> = carve::spread_order(chosen.len())
             .into_iter()
             .map(|k| chosen[k])
-            .map(|i| (i, box_crop(set, i, bounds)))
+            .map(|i| (i, box_crop(set, i, &bounds)))
             .take_while(|(_, [c0, c1, r0, r1])| {
                 held += (c1 - c0) as usize * (r1 - r0) as usize;
                 held <= REFINE_PIXELS
@@ -442,7 +446,7 @@ pub fn reconstruct(
             order
                 .into_iter()
                 .take(16)
-                .map(|k| (chosen[k], box_crop(set, chosen[k], bounds)))
+                .map(|k| (chosen[k], box_crop(set, chosen[k], &bounds)))
                 .collect()
         };
         let shots: Vec<refine::Shot> = picks
@@ -502,37 +506,20 @@ pub fn reconstruct(
     })
 }
 
-/// The pixels `[c0, c1) × [r0, r1)` of camera `i`'s image that can show the box `(lo, hi)`
-/// (luminaire frame, m): the box of the projections of its corners, one pixel wider each way; the
-/// whole image when a corner is behind the camera.
-fn box_crop(set: &RayImageSet, i: usize, (lo, hi): (DVec3, DVec3)) -> [u32; 4] {
+/// The pixels `[c0, c1) × [r0, r1)` of camera `i`'s image that can show `bounds` (luminaire
+/// frame, m): [`crate::nearfield::synth::pixel_bounds`], one pixel wider each way; one pixel when the
+/// camera sees none of it.
+fn box_crop(set: &RayImageSet, i: usize, bounds: &Aabb) -> [u32; 4] {
     let k = set.intrinsics_of(i);
-    let cam = &set.cameras[i];
-    let whole = [0, k.width, 0, k.height];
-    let (mut a, mut b) = (glam::DVec2::splat(f64::INFINITY), glam::DVec2::splat(f64::NEG_INFINITY));
-    for c in 0..8 {
-        let corner = DVec3::new(
-            if c & 1 == 0 { lo.x } else { hi.x },
-            if c & 2 == 0 { lo.y } else { hi.y },
-            if c & 4 == 0 { lo.z } else { hi.z },
-        );
-        let Some(uv) = k.project(cam.to_camera(corner - cam.position_m)) else {
-            return whole;
-        };
-        (a, b) = (a.min(uv), b.max(uv));
+    match pixel_bounds(bounds, &set.cameras[i], k) {
+        Some(r) => [
+            r.col0.saturating_sub(1),
+            (r.col1 + 1).min(k.width),
+            r.row0.saturating_sub(1),
+            (r.row1 + 1).min(k.height),
+        ],
+        None => [0, 1, 0, 1],
     }
-    let clamp = |x: f64, n: u32| x.clamp(0.0, f64::from(n)) as u32;
-    let c = [
-        clamp(a.x.floor() - 1.0, k.width),
-        clamp(b.x.ceil() + 1.0, k.width),
-        clamp(a.y.floor() - 1.0, k.height),
-        clamp(b.y.ceil() + 1.0, k.height),
-    ];
-    if c[0] >= c[1] || c[2] >= c[3] {
-        // The content is outside this camera's view: keep one pixel (it sees none of it).
-        return [0, 1, 0, 1];
-    }
-    c
 }
 
 /// `img` (taken with `k`) cut to `[c0, c1) × [r0, r1)`, with the intrinsics of the cut image.

@@ -368,8 +368,8 @@ fn snap_outline(
     // direction there (the mean over it and its outline neighbours two steps either way; within a
     // unit of that line), is pulled back onto the new outline, by at most as far as the outline
     // vertex moved.
-    let mut pull: BTreeMap<u32, f64> = BTreeMap::new();
-    let mut pull_dir: BTreeMap<u32, DVec3> = BTreeMap::new();
+    // Per vertex: how far back, along which direction.
+    let mut pull: BTreeMap<u32, (f64, DVec3)> = BTreeMap::new();
     for (&v, d) in &moves {
         let mut u = outward[&v].normalize_or_zero();
         for w in along.get(&v).into_iter().flatten() {
@@ -401,9 +401,8 @@ fn snap_outline(
                     let e = (p - new).dot(u);
                     let aside = ((p - new) - e * u).length();
                     let e = e.min(inwards);
-                    if e > 0.0 && aside <= voxel_m && pull.get(&w).is_none_or(|x| e > *x) {
-                        pull.insert(w, e);
-                        pull_dir.insert(w, u);
+                    if e > 0.0 && aside <= voxel_m && pull.get(&w).is_none_or(|x| e > x.0) {
+                        pull.insert(w, (e, u));
                     }
                 }
             }
@@ -413,8 +412,8 @@ fn snap_outline(
     for (v, d) in moves {
         mesh.vertices[v as usize] += d;
     }
-    for (w, e) in pull {
-        mesh.vertices[w as usize] -= e * pull_dir[&w];
+    for (w, (e, u)) in pull {
+        mesh.vertices[w as usize] -= e * u;
     }
 }
 
@@ -525,7 +524,8 @@ fn symmetric_eigen(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
 
 /// Which cameras see a point of one part past the rest of the mesh.
 struct Sight {
-    /// The other parts' triangles; `None` when there are none.
+    /// The other parts' triangles; `None` when there are none (or more than a hierarchy holds,
+    /// `bvh::MAX_TRIANGLES`: then every camera counts, as without this test).
     others: Option<ProxyBvh>,
     /// Segment parameters within this of either end do not count (the point's own surface, a
     /// fraction of a unit from it, is not an occluder).

@@ -76,8 +76,7 @@ pub fn simplify_flat(mesh: &Mesh, planes: &[(DVec3, DVec3)], unit_m: f64) -> (Me
             (s != 0.0).then_some((k, if s > 0.0 { 1 } else { -1 }))
         })
         .collect();
-    let alive = vec![true; mesh.triangles.len()];
-    let mut d = Decimator::new(mesh, &flat, alive, planes, unit_m);
+    let mut d = Decimator::new(mesh, &flat, planes, unit_m);
     report.vertices_collapsed = d.run();
     (d.finish(), report)
 }
@@ -120,19 +119,11 @@ fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 }
 
 impl<'a> Decimator<'a> {
-    fn new(
-        mesh: &'a Mesh,
-        flat: &'a [Option<(u32, i8)>],
-        alive: Vec<bool>,
-        planes: &[(DVec3, DVec3)],
-        unit_m: f64,
-    ) -> Self {
+    fn new(mesh: &'a Mesh, flat: &'a [Option<(u32, i8)>], planes: &[(DVec3, DVec3)], unit_m: f64) -> Self {
         let mut around = vec![Vec::new(); mesh.vertices.len()];
         for (i, t) in mesh.triangles.iter().enumerate() {
-            if alive[i] {
-                for &v in t {
-                    around[v as usize].push(i as u32);
-                }
+            for &v in t {
+                around[v as usize].push(i as u32);
             }
         }
         let basis: Vec<(DVec3, DVec3, DVec3)> = planes
@@ -155,7 +146,7 @@ impl<'a> Decimator<'a> {
         Self {
             vertices: &mesh.vertices,
             triangles: mesh.triangles.clone(),
-            alive,
+            alive: vec![true; mesh.triangles.len()],
             flat,
             around,
             uv,
