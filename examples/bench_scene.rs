@@ -16,6 +16,10 @@
 //!   luminaire, shadows and inter-reflection from about 100 and about 400 virtual point lights (the
 //!   paper's RSM sample counts).
 //!
+//! Each static frame is also timed lit per fragment as the triangles are drawn
+//! (`SceneSettings::deferred_max_pixels` = 0, the path of frames too large for the compute
+//! lighting's per-pixel buffers): `fragment_static_ms`.
+//!
 //! Two trivial passes of the same size (a full-screen triangle writing a constant; a compute pass
 //! storing one), timed before, between and after the cases, are the baseline: ratios are what to
 //! read on a software device, absolute times only on a real GPU. Prints one JSON object.
@@ -299,6 +303,20 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                 },
                 a.runs,
             )?;
+            // The same frame lit per fragment as the triangles are drawn (the path of frames
+            // larger than SceneSettings::deferred_max_pixels).
+            r.set_scene_settings(SceneSettings {
+                deferred_max_pixels: 0,
+                ..c.settings
+            })?;
+            let (fragment_ms, _) = median_ms(
+                || {
+                    r.render(&mut target, &cam, &opts)?;
+                    Ok(())
+                },
+                a.runs,
+            )?;
+            r.set_scene_settings(c.settings)?;
             // One luminaire moves 1 cm back and forth: its shadows and every VPL are made again.
             let mut k = 0u32;
             let base = c.placements[0].as_mat4();
@@ -359,6 +377,7 @@ fn run(a: &Args) -> Res<serde_json::Value> {
                 "shadow_face_px": stats.shadow_face_px,
                 "first_frame_ms": first_ms,
                 "static_ms": static_ms,
+                "fragment_static_ms": fragment_ms,
                 "moved_ms": moved_ms,
                 "vpl_generation_ms": vpl_generation_ms,
             }));

@@ -1032,3 +1032,129 @@ fn textured_surfaces_reflect_their_texels() {
     assert!(dark > 50 && light > 50, "{dark} dark, {light} light rug pixels");
     assert!(worst < 0.01, "worst {worst}");
 }
+
+/// The compute lighting (each pixel's surface from a G-buffer pass, lit once in a compute pass,
+/// composited with its depth) and the per-fragment lighting (`SceneSettings::deferred_max_pixels`
+/// = 0) give one frame: the office under the linear layout with shadows and inter-reflection,
+/// forward and reversed depth, luminance with the R32F depth output and tone-mapped RGBA8. The
+/// independent references are the tests above, which run the compute lighting.
+#[test]
+fn the_compute_lighting_gives_the_per_fragment_lightings_frame() {
+    let _g = GPU_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(mut r) = renderer() else { return };
+    let scene = office();
+    r.set_scene(&scene).unwrap();
+    let linear = photometry_text(LINEAR_IES, "linear.ies");
+    let lum = r.add_photometry(linear).unwrap();
+    for q in OFFICE_LUMINAIRES.iter() {
+        r.add_instance(lum, q.matrix().as_mat4()).unwrap();
+    }
+    // The BEGA luminaire's own appearance composites over both.
+    let bega = r.add_photometry(gpu_common::bega()).unwrap();
+    r.add_instance(bega, placement(0.5, 2.4, -0.5, 0.0).as_mat4()).unwrap();
+    let (w, hgt) = (120u32, 80u32);
+    let (eye, at) = (Vec3::new(2.8, 1.7, 1.8), Vec3::new(-1.0, 0.5, -0.9));
+    let forward = perspective(eye, at, 75.0, w as f32 / hgt as f32);
+    let (near, far) = (0.05f32, 50.0f32);
+    let t = 1.0 / (75f32.to_radians() / 2.0).tan();
+    let reversed = HostCamera {
+        projection: glam::Mat4::from_cols(
+            glam::Vec4::new(t * hgt as f32 / w as f32, 0.0, 0.0, 0.0),
+            glam::Vec4::new(0.0, t, 0.0, 0.0),
+            glam::Vec4::new(0.0, 0.0, near / (far - near), -1.0),
+            glam::Vec4::new(0.0, 0.0, far * near / (far - near), 0.0),
+        ),
+        depth_range: lumiview::gpu::DepthRange::ZeroToOne,
+        reversed_z: true,
+        ..forward
+    };
+    let luminance = TargetDesc {
+        depth: lumiview::gpu::DepthFormat::R32Float,
+        ..TargetDesc::luminance(w, hgt)
+    };
+    let display = TargetDesc {
+        color: lumiview::gpu::ColorFormat::Rgba8Srgb,
+        ..TargetDesc::luminance(w, hgt)
+    };
+    let tone = RenderOptions {
+        output: lumiview::gpu::OutputMode::ToneMapped,
+        exposure: 0.02,
+        ..RenderOptions::default()
+    };
+    let cases = [
+        (
+            "forward depth, luminance",
+            &forward,
+            luminance,
+            RenderOptions::default(),
+        ),
+        (
+            "reversed depth, luminance",
+            &reversed,
+            luminance,
+            RenderOptions::default(),
+        ),
+        ("forward depth, tone mapped", &forward, display, tone),
+    ];
+    for (name, cam, desc, options) in cases {
+        let mut frames = Vec::new();
+        for deferred_max_pixels in [0, u64::MAX] {
+            r.set_scene_settings(SceneSettings {
+                deferred_max_pixels,
+                ..SceneSettings::default()
+            })
+            .unwrap();
+            let mut t = RenderTarget::new(&r.ctx, &desc).unwrap();
+            r.render(&mut t, cam, &options).unwrap();
+            let color = t.read(&r.ctx, lumiview::gpu::Attachment::Color).unwrap();
+            let depth = if desc.depth == lumiview::gpu::DepthFormat::R32Float {
+                t.read(&r.ctx, lumiview::gpu::Attachment::Depth).unwrap()
+            } else {
+                Vec::new()
+            };
+            frames.push((color, depth));
+        }
+        let ((fc, fd), (cc, cd)) = (&frames[0], &frames[1]);
+        assert_eq!(fd, cd, "{name}: depth outputs differ");
+        let (mut n, mut off) = (0usize, Vec::new());
+        if desc.color == lumiview::gpu::ColorFormat::Rgba8Srgb {
+            for (k, (a, b)) in fc.chunks_exact(4).zip(cc.chunks_exact(4)).enumerate() {
+                n += usize::from(a[3] > 0);
+                let d = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0);
+                if d > 1 {
+                    off.push((k, f64::from(d)));
+                }
+            }
+        } else {
+            let f = |c: &[u8], k: usize| f32::from_le_bytes([c[4 * k], c[4 * k + 1], c[4 * k + 2], c[4 * k + 3]]);
+            for k in 0..(w * hgt) as usize {
+                if f(fc, 4 * k + 3) != f(cc, 4 * k + 3) {
+                    off.push((k, f64::INFINITY));
+                    continue;
+                }
+                n += usize::from(f(fc, 4 * k + 3) > 0.0);
+                let d = (0..3)
+                    .map(|c| {
+                        let (a, b) = (f64::from(f(fc, 4 * k + c)), f64::from(f(cc, 4 * k + c)));
+                        (a - b).abs() / a.abs().max(b.abs()).max(1e-3)
+                    })
+                    .fold(0.0, f64::max);
+                if d > 1e-4 {
+                    off.push((k, d));
+                }
+            }
+        }
+        println!(
+            "{name}: {n} pixels drawn; {} differ (relative > 1e-4, or > 1 level in RGBA8){}",
+            off.len(),
+            off.iter()
+                .map(|(k, d)| format!(" ({}, {}): {d:.2e}", *k as u32 % w, *k as u32 / w))
+                .take(5)
+                .collect::<String>()
+        );
+        assert!(n > (w * hgt / 2) as usize, "{name}: {n} pixels drawn");
+        // A pixel on a shadow's or an edge's boundary may tip either way in f32.
+        assert!(off.len() * 1000 <= n, "{name}: {} of {n} pixels differ", off.len());
+    }
+    gpu_common::assert_no_validation_messages();
+}

@@ -372,21 +372,58 @@ fn texture_rgb(r: TextureRecord, uv_in: vec2<f32>) -> vec3<f32> {
     return mix(mix(a, b, t.x), mix(c, d, t.x), t.y);
 }
 
-fn scene_color(in: VsOut) -> vec4<f32> {
+// Unit normal n as two numbers (octahedral map: n / (|x| + |y| + |z|), the lower half folded out),
+// exact to about 1e-7 in f32.
+fn octahedral(n: vec3<f32>) -> vec2<f32> {
+    let p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z >= 0.0) {
+        return p;
+    }
+    return (1.0 - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+}
+
+// The unit normal of octahedral(n).
+fn from_octahedral(e: vec2<f32>) -> vec3<f32> {
+    var v = vec3<f32>(e, 1.0 - abs(e.x) - abs(e.y));
+    let t = max(-v.z, 0.0);
+    v.x = v.x + select(t, -t, v.x >= 0.0);
+    v.y = v.y + select(t, -t, v.y >= 0.0);
+    return normalize(v);
+}
+
+// The surface each pixel sees, written by the G-buffer pass (fs_surface) and lit by cs_lighting:
+// `surface` = (world position m, ρ_b), `facing` = (octahedral normal of the side seen, ρ_r, ρ_g);
+// a pixel with no surface keeps the clear value facing.x = NO_SURFACE.
+struct SurfaceOut {
+    @location(0) surface: vec4<f32>,
+    @location(1) facing: vec4<f32>,
+};
+
+const NO_SURFACE: f32 = 2.0;
+
+// The fragment's unit normal turned towards the eye (two-sided: the side seen is the side lit).
+fn seen_normal(in: VsOut) -> vec3<f32> {
     var to_eye = frame.eye.xyz;
     if (frame.eye.w > 0.5) {
         to_eye = frame.eye.xyz - in.world;
     }
-    // Two-sided: the side seen is the side lit.
-    var n = normalize(in.normal);
-    if (dot(n, to_eye) < 0.0) {
-        n = -n;
-    }
-    let e = vec3<f32>(direct_lx(in.clip.xy, in.world, n)) + indirect_lx(in.world, n);
-    var rho = in.reflectance;
+    let n = normalize(in.normal);
+    return select(n, -n, dot(n, to_eye) < 0.0);
+}
+
+// The fragment's reflectance per channel: base colour × texture.
+fn reflectance(in: VsOut) -> vec3<f32> {
     if (in.texture > 0u) {
-        rho = rho * texture_rgb(texture_records[in.texture - 1u], in.uv);
+        return in.reflectance * texture_rgb(texture_records[in.texture - 1u], in.uv);
     }
+    return in.reflectance;
+}
+
+// The colour of a surface point x (normal n towards the eye, reflectance rho) seen by the pixel
+// whose centre is `frag` (framebuffer pixels): L = ρ·E/π per channel, E direct (the pixel's
+// tile's luminaires) plus inter-reflected, or its tone-mapped value.
+fn lit_color(frag: vec2<f32>, x: vec3<f32>, n: vec3<f32>, rho: vec3<f32>) -> vec4<f32> {
+    let e = vec3<f32>(direct_lx(frag, x, n)) + indirect_lx(x, n);
     let l = rho * (e / PI);
     if (frame.params.y > 0.5) {
         let exposure = frame.params.x;
@@ -395,14 +432,50 @@ fn scene_color(in: VsOut) -> vec4<f32> {
     return vec4<f32>(l, 1.0);
 }
 
-// Entry points with the R32F depth output (targets with LUMI_DEPTH_R32F) ...
+// The G-buffer pass's fragment: the surface, its normal and its reflectance.
+@fragment
+fn fs_surface(in: VsOut) -> SurfaceOut {
+    let n = seen_normal(in);
+    let rho = reflectance(in);
+    return SurfaceOut(vec4<f32>(in.world, rho.b), vec4<f32>(octahedral(n), rho.r, rho.g));
+}
+
+// Lighting per fragment as the scene's triangles are drawn (frames larger than
+// SceneSettings::deferred_max_pixels): with the R32F depth output (targets with LUMI_DEPTH_R32F) ...
 @fragment
 fn fs_scene(in: VsOut) -> FsOut {
-    return FsOut(scene_color(in), vec4<f32>(in.clip.z, 0.0, 0.0, 1.0));
+    return FsOut(lit_color(in.clip.xy, in.world, seen_normal(in), reflectance(in)), vec4<f32>(in.clip.z, 0.0, 0.0, 1.0));
 }
 
 // ... and without it.
 @fragment
 fn fs_scene_color_only(in: VsOut) -> @location(0) vec4<f32> {
-    return scene_color(in);
+    return lit_color(in.clip.xy, in.world, seen_normal(in), reflectance(in));
+}
+
+@group(1) @binding(0) var surfaces: texture_2d<f32>;
+@group(1) @binding(1) var facings: texture_2d<f32>;
+// The lit colour of every pixel (alpha 0 where no surface is), drawn into the frame by
+// shaders/scene/composite.wgsl.
+@group(1) @binding(2) var lit: texture_storage_2d<rgba32float, write>;
+
+// Lighting, once per pixel, of the surface it sees (a compute pass: fragments the depth test hid
+// cost nothing, and the work runs on every compute unit, where a data-centre GPU runs fragment
+// shaders on a few of them only).
+@compute @workgroup_size(8, 8)
+fn cs_lighting(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(lit);
+    if (id.x >= size.x || id.y >= size.y) {
+        return;
+    }
+    let p = vec2<i32>(id.xy);
+    let s = textureLoad(surfaces, p, 0);
+    let f = textureLoad(facings, p, 0);
+    if (f.x > 1.5) {
+        textureStore(lit, p, vec4<f32>(0.0));
+        return;
+    }
+    // The pixel's centre, as a fragment's position would be.
+    let frag = vec2<f32>(id.xy) + vec2<f32>(0.5);
+    textureStore(lit, p, lit_color(frag, s.xyz, from_octahedral(f.xy), vec3<f32>(f.z, f.w, s.w)));
 }

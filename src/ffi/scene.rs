@@ -337,6 +337,7 @@ pub unsafe extern "C" fn lumi_context_set_scene_settings(
                     bounce_photons: s.bounce_photons,
                     vpl_clamp_m: s.vpl_clamp_m,
                     shadow_updates_per_frame: s.shadow_updates_per_frame,
+                    deferred_max_pixels: SceneSettings::default().deferred_max_pixels,
                 })
                 .map_err(pass_error)
         })

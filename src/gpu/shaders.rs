@@ -8,7 +8,8 @@
 //! 3. the pass's own code: `shaders/farfield.wgsl`; the parts of `shaders/nearfield/` joined in the
 //!    order of `NEARFIELD` (`pass.wgsl` says what each part holds); `shaders/scene/lighting.wgsl`
 //!    and `shaders/scene/shadow.wgsl`, after the scene pass's own generated constants (intensity
-//!    table size, the shadow maps' near plane and bias, the cube faces' axes: `scene_constants`).
+//!    table size, the shadow maps' near plane and bias, the cube faces' axes: `scene_constants`);
+//!    `shaders/scene/composite.wgsl`.
 //!
 //! The unit tests below parse and validate every assembled shader with naga (the version wgpu
 //! uses), without a GPU, and check each GPU struct's size and member offsets and the near-field
@@ -45,6 +46,8 @@ pub(crate) const NEARFIELD: [&str; 6] = [
 pub(crate) const SCENE_LIGHTING: &str = include_str!("../../shaders/scene/lighting.wgsl");
 /// The scene pass's shadow-map shader.
 pub(crate) const SCENE_SHADOW: &str = include_str!("../../shaders/scene/shadow.wgsl");
+/// The scene pass's composite of its lit pixels into the frame.
+pub(crate) const SCENE_COMPOSITE: &str = include_str!("../../shaders/scene/composite.wgsl");
 
 /// The constants generated from the Rust definitions (part 1).
 pub(crate) fn generated_constants() -> String {
@@ -115,6 +118,11 @@ pub fn scene_shadow() -> String {
     .concat()
 }
 
+/// The scene pass's composite shader as compiled.
+pub fn scene_composite() -> String {
+    [generated_constants().as_str(), COMMON, SCENE_COMPOSITE].concat()
+}
+
 /// The far-field shader as compiled.
 pub fn farfield() -> String {
     [generated_constants().as_str(), COMMON, FARFIELD].concat()
@@ -183,6 +191,7 @@ mod tests {
         module("nearfield", &nearfield());
         module("scene", &scene());
         module("scene shadow", &scene_shadow());
+        module("scene composite", &scene_composite());
     }
 
     #[test]

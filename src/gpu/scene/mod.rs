@@ -7,6 +7,13 @@
 //! near-field passes, so the luminaires' own appearance composites over the lit room through the
 //! one depth test.
 //!
+//! Each pixel is lit once: `prepare` submits a G-buffer pass (the surface each pixel sees:
+//! position, normal of the side seen, reflectance, depth) and a compute pass that lights it
+//! (`cs_lighting`); the frame's render pass then draws a full-screen triangle that writes the lit
+//! colours with their surfaces' depth (shaders/scene/composite.wgsl). Frames of more than
+//! [`SceneSettings::deferred_max_pixels`] pixels are lit per fragment as the triangles are drawn
+//! instead (the same lighting functions; no per-pixel images).
+//!
 //! Promises:
 //! - [`ScenePass::set_scene`] uploads the scene once: world-space triangles, their geometric
 //!   normals (surfaces are two-sided: the side the eye sees is the side lit, as the reference's
@@ -23,16 +30,17 @@
 //!   again when its centre moved, at most [`SceneSettings::shadow_updates_per_frame`] luminaires a
 //!   frame (round robin); a new scene, layout or number of luminaires renders all.
 //! - Virtual point lights are made on the CPU when the scene, an instance or the photon count
-//!   changes, and gathered by every fragment.
+//!   changes, and gathered by every pixel.
 //! - Light culling: each luminaire has an influence radius where its light falls below
 //!   [`SceneSettings::lux_floor_lx`]; each 16-pixel screen tile lists the luminaires whose
-//!   influence sphere covers it ([`lights`]), and fragments loop over their tile's list only.
+//!   influence sphere covers it ([`lights`]), and pixels loop over their tile's list only.
 //! - Memory: the vertex buffer (48 bytes a vertex, three per triangle) must fit the device's
 //!   largest buffer; the shadow atlas stays within [`SceneSettings::shadow_budget_bytes`]; the
 //!   intensity atlas holds up to [`lights::MAX_INTENSITY_TABLES`] photometries (1 MiB each); the
 //!   tile lists, luminaire records and VPLs are storage buffers; lists larger than the device's
 //!   binding limit (lavapipe: 128 MiB; every luminaire in every tile reaches it near a thousand
-//!   luminaires at 4K) are an error that names the lux floor.
+//!   luminaires at 4K) are an error that names the lux floor; the compute lighting's per-pixel
+//!   images take [`SURFACE_BYTES_PER_PIXEL`] a pixel of the frame, kept while frames keep their size.
 
 pub mod lights;
 pub mod shadows;
@@ -70,7 +78,7 @@ pub struct SceneSettings {
     /// Largest cube face, pixels (faces shrink by powers of two to fit the budget).
     pub max_face_px: u32,
     /// Inter-reflection from virtual point lights (`scene::vpl`: photons shot from the
-    /// luminaires on the CPU, every reflection gathered per fragment, all bounces).
+    /// luminaires on the CPU, every reflection gathered per pixel, all bounces).
     pub indirect: bool,
     /// Photons shot from all luminaires together (each leaves a VPL per reflection: about 1.7–2×
     /// as many VPLs in the office), 1…[`MAX_BOUNCE_PHOTONS`].
@@ -81,7 +89,16 @@ pub struct SceneSettings {
     /// the others keep their old maps until a later frame's turn. A new scene, shadow layout or
     /// atlas renders every luminaire at once.
     pub shadow_updates_per_frame: u32,
+    /// Frames of up to this many pixels are lit once per pixel in a compute pass over the surface
+    /// each pixel sees (a G-buffer of [`SURFACE_BYTES_PER_PIXEL`] a pixel, kept between frames of
+    /// one size); larger frames are lit per fragment as they are drawn (no per-pixel buffers,
+    /// but every fragment the depth test later hides is lit too). 0: always per fragment.
+    pub deferred_max_pixels: u64,
 }
+
+/// GPU memory a pixel of the compute lighting's buffers takes: the surface (position, reflectance:
+/// 16 bytes), its normal and reflectance (16), its depth (4) and its lit colour (16), bytes.
+pub const SURFACE_BYTES_PER_PIXEL: u64 = 52;
 
 /// Most photons [`SceneSettings::bounce_photons`] may ask for.
 pub const MAX_BOUNCE_PHOTONS: u32 = 1 << 16;
@@ -97,6 +114,7 @@ impl Default for SceneSettings {
             bounce_photons: 256,
             vpl_clamp_m: 0.25,
             shadow_updates_per_frame: 32,
+            deferred_max_pixels: 1 << 24,
         }
     }
 }
@@ -463,12 +481,36 @@ struct VplCache {
     _photometries: Vec<Arc<Photometry>>,
 }
 
-/// What a scene pipeline is specialised for.
+/// What a scene pipeline drawing into the frame is specialised for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 struct PipelineKey {
     color: ColorFormat,
     depth_copy: bool,
     reversed_z: bool,
+    /// The composite of the compute lighting's pixels (true) or the scene's triangles lit per
+    /// fragment (false).
+    deferred: bool,
+}
+
+/// Format of the compute lighting's surface buffers and of its lit colours.
+const SURFACE_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// `NO_SURFACE` in shaders/scene/lighting.wgsl: the clear value of a pixel's normal where no
+/// surface is.
+const NO_SURFACE: f64 = 2.0;
+
+/// The compute lighting's per-pixel buffers for frames of one size (`fs_surface`, `cs_lighting`
+/// and shaders/scene/composite.wgsl say what each holds).
+#[derive(Debug)]
+struct SurfaceBuffers {
+    size: (u32, u32),
+    surface: wgpu::TextureView,
+    facing: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    /// `cs_lighting`'s group 1: surface, facing, lit colour.
+    lighting_bind: wgpu::BindGroup,
+    /// The composite's group 0: lit colour, depth.
+    composite_bind: wgpu::BindGroup,
 }
 
 /// Pipelines, layouts and the uploaded scene of the scene lighting pass.
@@ -478,6 +520,14 @@ pub struct ScenePass {
     frame_layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     pipelines: HashMap<PipelineKey, wgpu::RenderPipeline>,
+    composite_module: wgpu::ShaderModule,
+    composite_layout: wgpu::BindGroupLayout,
+    composite_pipeline_layout: wgpu::PipelineLayout,
+    lighting_layout: wgpu::BindGroupLayout,
+    /// The G-buffer pass, for forward depth (index 0) and reversed depth (index 1).
+    surface_pipelines: [wgpu::RenderPipeline; 2],
+    lighting_pipeline: wgpu::ComputePipeline,
+    surfaces: Option<SurfaceBuffers>,
     face_layout: wgpu::BindGroupLayout,
     shadow_pipeline: wgpu::RenderPipeline,
     /// Clears a face's square to the far depth (before it is rendered again).
@@ -505,7 +555,7 @@ pub struct ScenePass {
 fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Texture {
             sample_type,
             view_dimension: wgpu::TextureViewDimension::D2,
@@ -518,7 +568,7 @@ fn texture_entry(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bi
 fn storage_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
-        visibility: wgpu::ShaderStages::FRAGMENT,
+        visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
             ty: wgpu::BufferBindingType::Storage { read_only: true },
             has_dynamic_offset: false,
@@ -589,6 +639,45 @@ fn depth_only_pipeline(
     })
 }
 
+/// The G-buffer pass of the compute lighting: the scene's triangles with the frame's depth test
+/// (`reversed_z`: nearer is greater), each pixel's nearest surface written by `fs_surface`.
+fn surface_pipeline(
+    ctx: &GpuContext,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    reversed_z: bool,
+) -> wgpu::RenderPipeline {
+    let target = Some(wgpu::ColorTargetState {
+        format: SURFACE_FORMAT,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    });
+    ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("scene surfaces"),
+        layout: Some(layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_scene"),
+            compilation_options: Default::default(),
+            buffers: &[Some(SCENE_LAYOUT)],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(frame_depth_state(reversed_z)),
+        multisample: wgpu::MultisampleState::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_surface"),
+            compilation_options: Default::default(),
+            targets: &[target.clone(), target],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 fn storage_buffer(ctx: &GpuContext, label: &str, bytes: &[u8]) -> wgpu::Buffer {
     let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(label),
@@ -619,7 +708,7 @@ impl ScenePass {
                 entries: &[
                     wgpu::BindGroupLayoutEntry {
                         binding: 0,
-                        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                        visibility: wgpu::ShaderStages::VERTEX_FRAGMENT | wgpu::ShaderStages::COMPUTE,
                         ty: wgpu::BindingType::Buffer {
                             ty: wgpu::BufferBindingType::Uniform,
                             has_dynamic_offset: false,
@@ -639,6 +728,55 @@ impl ScenePass {
             let pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("scene"),
                 bind_group_layouts: &[Some(&frame_layout)],
+                immediate_size: 0,
+            });
+            let unfilterable = wgpu::TextureSampleType::Float { filterable: false };
+            let lighting_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("scene lighting surfaces"),
+                entries: &[
+                    texture_entry(0, unfilterable),
+                    texture_entry(1, unfilterable),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 2,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::StorageTexture {
+                            access: wgpu::StorageTextureAccess::WriteOnly,
+                            format: SURFACE_FORMAT,
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                        },
+                        count: None,
+                    },
+                ],
+            });
+            let lighting_pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("scene lighting"),
+                bind_group_layouts: &[Some(&frame_layout), Some(&lighting_layout)],
+                immediate_size: 0,
+            });
+            let lighting_pipeline = ctx.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("scene lighting"),
+                layout: Some(&lighting_pipeline_layout),
+                module: &module,
+                entry_point: Some("cs_lighting"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let surface_pipelines =
+                [false, true].map(|reversed_z| surface_pipeline(ctx, &pipeline_layout, &module, reversed_z));
+            let composite_module = ctx.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("scene/composite.wgsl"),
+                source: wgpu::ShaderSource::Wgsl(super::shaders::scene_composite().into()),
+            });
+            let composite_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("scene composite"),
+                entries: &[
+                    texture_entry(0, unfilterable),
+                    texture_entry(1, wgpu::TextureSampleType::Depth),
+                ],
+            });
+            let composite_pipeline_layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("scene composite"),
+                bind_group_layouts: &[Some(&composite_layout)],
                 immediate_size: 0,
             });
             let face_layout = ctx.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -688,6 +826,13 @@ impl ScenePass {
                 frame_layout,
                 pipeline_layout,
                 pipelines: HashMap::new(),
+                composite_module,
+                composite_layout,
+                composite_pipeline_layout,
+                lighting_layout,
+                surface_pipelines,
+                lighting_pipeline,
+                surfaces: None,
                 face_layout,
                 shadow_pipeline,
                 clear_pipeline,
@@ -1138,12 +1283,116 @@ impl ScenePass {
         Ok(())
     }
 
+    /// The compute lighting's buffers for frames of `width` × `height` pixels (made again when the
+    /// size changed).
+    fn surface_buffers(&mut self, ctx: &GpuContext, width: u32, height: u32) -> Result<(), GpuError> {
+        if self.surfaces.as_ref().is_some_and(|b| b.size == (width, height)) {
+            return Ok(());
+        }
+        // The old buffers go first: two frame sizes' worth need not fit at once.
+        self.surfaces = None;
+        let made = ctx.scoped("making the scene lighting's per-pixel buffers", || {
+            let make = |label: &str, format: wgpu::TextureFormat, usage: wgpu::TextureUsages| {
+                ctx.device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some(label),
+                        size: wgpu::Extent3d {
+                            width,
+                            height,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format,
+                        usage: usage | wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                    .create_view(&wgpu::TextureViewDescriptor::default())
+            };
+            let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+            let surface = make("scene surfaces", SURFACE_FORMAT, attachment);
+            let facing = make("scene surface normals", SURFACE_FORMAT, attachment);
+            let depth = make("scene surface depth", wgpu::TextureFormat::Depth32Float, attachment);
+            let lit = make("scene lit colour", SURFACE_FORMAT, wgpu::TextureUsages::STORAGE_BINDING);
+            let lighting_bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("scene lighting surfaces"),
+                layout: &self.lighting_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&surface),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&facing),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: wgpu::BindingResource::TextureView(&lit),
+                    },
+                ],
+            });
+            let composite_bind = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("scene composite"),
+                layout: &self.composite_layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::TextureView(&lit),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&depth),
+                    },
+                ],
+            });
+            Ok(SurfaceBuffers {
+                size: (width, height),
+                surface,
+                facing,
+                depth,
+                lighting_bind,
+                composite_bind,
+            })
+        })?;
+        self.surfaces = Some(made);
+        Ok(())
+    }
+
     fn pipeline(&mut self, ctx: &GpuContext, key: PipelineKey) -> Result<wgpu::RenderPipeline, GpuError> {
         if let Some(p) = self.pipelines.get(&key) {
             return Ok(p.clone());
         }
         let p = ctx.scoped("creating a scene pipeline", || {
             let targets = &frame_color_targets(key.color, key.depth_copy);
+            if key.deferred {
+                return Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                    label: Some("scene composite"),
+                    layout: Some(&self.composite_pipeline_layout),
+                    vertex: wgpu::VertexState {
+                        module: &self.composite_module,
+                        entry_point: Some("vs_composite"),
+                        compilation_options: Default::default(),
+                        buffers: &[],
+                    },
+                    primitive: wgpu::PrimitiveState::default(),
+                    depth_stencil: Some(frame_depth_state(key.reversed_z)),
+                    multisample: wgpu::MultisampleState::default(),
+                    fragment: Some(wgpu::FragmentState {
+                        module: &self.composite_module,
+                        entry_point: Some(if key.depth_copy {
+                            "fs_composite"
+                        } else {
+                            "fs_composite_color_only"
+                        }),
+                        compilation_options: Default::default(),
+                        targets,
+                    }),
+                    multiview_mask: None,
+                    cache: None,
+                }));
+            }
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some("scene lighting"),
                 layout: Some(&self.pipeline_layout),
@@ -1273,12 +1522,17 @@ impl Pass for ScenePass {
             ],
             indirect: [vpl_count, 0, 0, 0],
         };
+        let deferred = u64::from(target.width) * u64::from(target.height) <= settings.deferred_max_pixels;
         let key = PipelineKey {
             color: target.color,
             depth_copy: target.depth == DepthFormat::R32Float,
             reversed_z: view.camera().reversed_z,
+            deferred,
         };
         let pipeline = self.pipeline(ctx, key)?;
+        if deferred {
+            self.surface_buffers(ctx, target.width, target.height)?;
+        }
         let Some(mesh) = &self.mesh else {
             return Ok(SceneFrame::default());
         };
@@ -1336,12 +1590,85 @@ impl Pass for ScenePass {
         let Some(mesh) = &self.mesh else {
             return Ok(SceneFrame::default());
         };
+        let Some(surfaces) = self.surfaces.as_ref().filter(|_| deferred) else {
+            return Ok(SceneFrame {
+                draw: Some(SceneDraw {
+                    pipeline,
+                    bind,
+                    vertices: Some(mesh.vertices.clone()),
+                    count: mesh.count,
+                }),
+            });
+        };
+        // The compute lighting: each pixel's surface (the G-buffer pass), then its light, submitted
+        // now so that the frame's render pass composites it.
+        ctx.scoped("lighting the scene", || {
+            let far = if key.reversed_z { 0.0 } else { 1.0 };
+            let mut enc = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("scene lighting"),
+            });
+            {
+                let clear = |c: wgpu::Color| wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(c),
+                    store: wgpu::StoreOp::Store,
+                };
+                let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("scene surfaces"),
+                    color_attachments: &[
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: &surfaces.surface,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: clear(wgpu::Color::TRANSPARENT),
+                        }),
+                        Some(wgpu::RenderPassColorAttachment {
+                            view: &surfaces.facing,
+                            depth_slice: None,
+                            resolve_target: None,
+                            ops: clear(wgpu::Color {
+                                r: NO_SURFACE,
+                                g: 0.0,
+                                b: 0.0,
+                                a: 0.0,
+                            }),
+                        }),
+                    ],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &surfaces.depth,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(far),
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
+                    }),
+                    timestamp_writes: None,
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(&self.surface_pipelines[usize::from(key.reversed_z)]);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+                pass.draw(0..mesh.count, 0..1);
+            }
+            {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("scene lighting"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.lighting_pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.set_bind_group(1, &surfaces.lighting_bind, &[]);
+                pass.dispatch_workgroups(target.width.div_ceil(8), target.height.div_ceil(8), 1);
+            }
+            ctx.queue.submit([enc.finish()]);
+            Ok(())
+        })?;
         Ok(SceneFrame {
             draw: Some(SceneDraw {
                 pipeline,
-                bind,
-                vertices: mesh.vertices.clone(),
-                count: mesh.count,
+                bind: surfaces.composite_bind.clone(),
+                vertices: None,
+                count: 3,
             }),
         })
     }
@@ -1352,17 +1679,20 @@ impl Pass for ScenePass {
         };
         pass.set_pipeline(&d.pipeline);
         pass.set_bind_group(0, &d.bind, &[]);
-        pass.set_vertex_buffer(0, d.vertices.slice(..));
+        if let Some(v) = &d.vertices {
+            pass.set_vertex_buffer(0, v.slice(..));
+        }
         pass.draw(0..d.count, 0..1);
     }
 }
 
-/// The scene's one draw of a frame.
+/// The scene's one draw of a frame: its triangles lit per fragment (with their vertices), or the
+/// compute lighting's composite (a full-screen triangle, no vertex buffer).
 #[derive(Debug)]
 struct SceneDraw {
     pipeline: wgpu::RenderPipeline,
     bind: wgpu::BindGroup,
-    vertices: wgpu::Buffer,
+    vertices: Option<wgpu::Buffer>,
     count: u32,
 }
 
