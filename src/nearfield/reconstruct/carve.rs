@@ -60,6 +60,67 @@ impl View {
     }
 }
 
+/// Flags, one bit each (a 256³ grid takes 2 MiB).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Cells {
+    bits: Vec<u64>,
+    len: usize,
+}
+
+impl Cells {
+    /// `len` flags, all false.
+    pub fn new(len: usize) -> Self {
+        Cells {
+            bits: vec![0; len.div_ceil(64)],
+            len,
+        }
+    }
+
+    /// Number of flags.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Flag `i` (false past the end).
+    pub fn get(&self, i: usize) -> bool {
+        i < self.len && self.bits[i / 64] >> (i % 64) & 1 == 1
+    }
+
+    /// Sets flag `i` (ignored past the end).
+    pub fn set(&mut self, i: usize, on: bool) {
+        if i < self.len {
+            let (w, b) = (i / 64, 1u64 << (i % 64));
+            if on {
+                self.bits[w] |= b;
+            } else {
+                self.bits[w] &= !b;
+            }
+        }
+    }
+
+    /// Sets every flag of `range` (clipped to the flags).
+    pub fn fill(&mut self, range: std::ops::Range<usize>) {
+        for i in range.start..range.end.min(self.len) {
+            self.bits[i / 64] |= 1u64 << (i % 64);
+        }
+    }
+
+    /// Flags set.
+    pub fn count(&self) -> usize {
+        self.bits.iter().map(|w| w.count_ones() as usize).sum()
+    }
+
+    /// Every flag in order.
+    pub fn iter(&self) -> impl Iterator<Item = bool> + '_ {
+        (0..self.len).map(|i| self.get(i))
+    }
+}
+
 /// The carved volume: cubes of `voxel_m` over `n`³ cells from `origin`, occupied or not.
 #[derive(Debug, Clone)]
 pub struct Occupancy {
@@ -70,21 +131,35 @@ pub struct Occupancy {
     /// Cells per axis.
     pub n: usize,
     /// `n³` flags, x fastest.
-    pub cells: Vec<bool>,
+    pub cells: Cells,
     /// Cube tests made (one cube against one view), for the report.
     pub tests: u64,
 }
 
 impl Occupancy {
+    /// The grid of `self` with other flags (`cells.len()` must be n³).
+    pub fn with_cells(&self, cells: Cells) -> Occupancy {
+        Occupancy {
+            origin: self.origin,
+            voxel_m: self.voxel_m,
+            n: self.n,
+            cells,
+            tests: self.tests,
+        }
+    }
+
     /// Whether cell (x, y, z) is occupied (false outside the grid).
     pub fn at(&self, x: i64, y: i64, z: i64) -> bool {
         let n = self.n as i64;
-        (0..n).contains(&x) && (0..n).contains(&y) && (0..n).contains(&z) && self.cells[((z * n + y) * n + x) as usize]
+        (0..n).contains(&x)
+            && (0..n).contains(&y)
+            && (0..n).contains(&z)
+            && self.cells.get(((z * n + y) * n + x) as usize)
     }
 
     /// Occupied cells.
     pub fn count(&self) -> usize {
-        self.cells.iter().filter(|&&c| c).count()
+        self.cells.count()
     }
 
     /// Centre of cell (x, y, z) (m).
@@ -267,7 +342,7 @@ pub fn carve(
 ) -> Occupancy {
     let n = BASE_CELLS << levels;
     let origin = centre - DVec3::splat(half_m);
-    let mut cells = vec![false; n * n * n];
+    let mut cells = Cells::new(n * n * n);
     let mut tests = 0u64;
     // Cells (packed by `pack`) of the level before that were split: their children are judged now.
     // Children are made a chunk of parents at a time, so memory holds the undecided cells of one
@@ -318,7 +393,7 @@ pub fn carve(
                         for zz in z0..z0 + scale {
                             for yy in y0..y0 + scale {
                                 let row = (zz * n + yy) * n;
-                                cells[row + x0..row + x0 + scale].fill(true);
+                                cells.fill(row + x0..row + x0 + scale);
                             }
                         }
                     }
@@ -336,5 +411,29 @@ pub fn carve(
         n,
         cells,
         tests,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cells_hold_one_bit_each_across_word_boundaries() {
+        let mut c = Cells::new(130);
+        assert_eq!((c.len(), c.count()), (130, 0));
+        c.fill(60..70);
+        c.set(129, true);
+        c.set(200, true); // past the end: ignored
+        assert_eq!(c.count(), 11);
+        assert!(c.get(63) && c.get(64) && c.get(69) && c.get(129));
+        assert!(!c.get(59) && !c.get(70) && !c.get(128) && !c.get(200));
+        c.set(64, false);
+        assert_eq!(c.count(), 10);
+        assert!(!c.get(64) && c.get(65));
+        let on: Vec<usize> = c.iter().enumerate().filter(|(_, b)| *b).map(|(i, _)| i).collect();
+        assert_eq!(on, [60, 61, 62, 63, 65, 66, 67, 68, 69, 129]);
+        c.fill(125..1000);
+        assert_eq!(c.count(), 14); // 125…129, 129 already set
     }
 }

@@ -7,7 +7,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
-use super::carve::Occupancy;
+use super::carve::{Cells, Occupancy};
 use crate::nearfield::synth::proxy::{ProxyMesh, ProxySurface};
 
 /// A triangle mesh: vertices and index triples (m, luminaire frame).
@@ -664,12 +664,12 @@ pub fn compacted(vertices: &[DVec3], triangles: impl IntoIterator<Item = [u32; 3
 /// as an occupancy: to measure how much light a mesh that no longer bounds a volume explains.
 pub fn cells_of(mesh: &Mesh, occ: &Occupancy) -> Occupancy {
     let n = occ.n as i64;
-    let mut cells = vec![false; occ.cells.len()];
+    let mut cells = Cells::new(occ.cells.len());
     let mut mark = |p: DVec3| {
         let q = ((p - occ.origin) / occ.voxel_m).floor();
         let (x, y, z) = (q.x as i64, q.y as i64, q.z as i64);
         if (0..n).contains(&x) && (0..n).contains(&y) && (0..n).contains(&z) {
-            cells[((z * n + y) * n + x) as usize] = true;
+            cells.set(((z * n + y) * n + x) as usize, true);
         }
     };
     for t in &mesh.triangles {
@@ -683,7 +683,7 @@ pub fn cells_of(mesh: &Mesh, occ: &Occupancy) -> Occupancy {
             }
         }
     }
-    Occupancy { cells, ..occ.clone() }
+    occ.with_cells(cells)
 }
 
 #[cfg(test)]
@@ -691,13 +691,13 @@ mod tests {
     use super::*;
 
     fn ball(n: usize, r_cells: f64) -> Occupancy {
-        let mut cells = vec![false; n * n * n];
+        let mut cells = Cells::new(n * n * n);
         let c = n as f64 / 2.0;
         for z in 0..n {
             for y in 0..n {
                 for x in 0..n {
                     let p = DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) - c;
-                    cells[(z * n + y) * n + x] = p.length() <= r_cells;
+                    cells.set((z * n + y) * n + x, p.length() <= r_cells);
                 }
             }
         }
@@ -718,7 +718,7 @@ mod tests {
             for y in 0..n {
                 for x in 0..n {
                     let (dx, dy) = (x as f64 + 0.5 - c, y as f64 + 0.5 - c);
-                    occ.cells[(z * n + y) * n + x] = dx.hypot(dy) <= r_cells;
+                    occ.cells.set((z * n + y) * n + x, dx.hypot(dy) <= r_cells);
                 }
             }
         }
@@ -741,7 +741,10 @@ mod tests {
                     let top = c + 1.5;
                     let bottom = top - (3.0 + 6.0 * (dx + 18.0) / 36.0);
                     let zc = z as f64 + 0.5;
-                    occ.cells[(z * n + y) * n + x] = dx.abs() <= 18.0 && dy.abs() <= 18.0 && zc <= top && zc >= bottom;
+                    occ.cells.set(
+                        (z * n + y) * n + x,
+                        dx.abs() <= 18.0 && dy.abs() <= 18.0 && zc <= top && zc >= bottom,
+                    );
                 }
             }
         }
@@ -813,7 +816,7 @@ mod tests {
         collapse_thin(&mut m, &occ, 10.0 * cell);
         let cells = cells_of(&m, &occ);
         assert!(cells.count() > 0);
-        for (i, &c) in cells.cells.iter().enumerate() {
+        for (i, c) in cells.cells.iter().enumerate() {
             let z = i / (n * n);
             if c {
                 let (x, y) = (i % n, (i / n) % n);

@@ -544,7 +544,7 @@ fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> 
 /// Cameras read again for [`refine`], at most ...
 pub const REFINE_CAMERAS: usize = 64;
 /// ... and as many as hold at most this many pixels together (each image cut to where the content
-/// can be; 128 MiB of f32, 27 whole full-size 1216 × 1021 images), but at least 16.
+/// can be; 32 MiB of f32, 6.8 whole full-size 1216 × 1021 images), but at least 16.
 pub const REFINE_PIXELS: usize = 1 << 23;
 
 /// One carving rule's result, meshed and checked.
@@ -643,12 +643,13 @@ fn dilated(occ: &Occupancy) -> Occupancy {
     let mut cells = occ.cells.clone();
     for stride in [1, n, n * n] {
         let src = cells.clone();
-        for (i, c) in cells.iter_mut().enumerate() {
+        for i in 0..src.len() {
             let k = (i / stride) % n;
-            *c = src[i] || (k > 0 && src[i - stride]) || (k + 1 < n && src[i + stride]);
+            let on = src.get(i) || (k > 0 && src.get(i - stride)) || (k + 1 < n && src.get(i + stride));
+            cells.set(i, on);
         }
     }
-    Occupancy { cells, ..occ.clone() }
+    occ.with_cells(cells)
 }
 
 /// Whether the ray from `origin` along unit `dir` passes through an occupied cell (sampled every
