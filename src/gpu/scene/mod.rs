@@ -941,7 +941,7 @@ impl ScenePass {
         Ok(())
     }
 
-    /// Removes the scene: frames draw no room.
+    /// Removes the scene: frames draw no room (the per-pixel lighting images are freed too).
     pub fn clear_scene(&mut self) {
         self.mesh = None;
         self.shadows = None;
@@ -949,6 +949,7 @@ impl ScenePass {
         self.vpls = None;
         self.cpu = None;
         self.emission.clear();
+        self.surfaces = None;
     }
 
     /// The virtual point lights of `instances` (made again when the scene, a luminaire or the
