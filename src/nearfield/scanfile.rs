@@ -19,7 +19,8 @@
 //! the caller's cache folder or [`default_cache_dir`] (`$LUMIVIEW_CACHE_DIR`, else
 //! `$XDG_CACHE_HOME/lumiview/packs`, else `$HOME/.cache/lumiview/packs`, else
 //! `<temp>/lumiview-cache/packs`), and `<key>` is a 64-bit FNV-1a hash (16 hex digits) of the
-//! input's canonical path, length and modification time and of the pack format and defaults used.
+//! input's canonical path, length and modification time and of the pack format, the methods and the
+//! option defaults used (a new estimator rule or default re-packs).
 //! Editing the input gives a new key; images a manifest refers to are not part of the key (delete the
 //! cached file to re-pack after changing only them). A cached file is verified page by page and
 //! tile by tile each time it is opened ([`Pack::verify`]); one that does not open or verify is
@@ -53,12 +54,28 @@ pub enum ScanFileKind {
 /// Bytes read to tell the kinds apart (white space before a manifest's `{` included).
 const SNIFF_BYTES: usize = 4096;
 
-/// Cache format: part of every key, so a change of the defaults below invalidates old entries.
+/// Cache format: part of every key, so a change of the methods below invalidates old entries (the
+/// option defaults and the estimate's rules are keyed too, by [`defaults_key`]; this names what they
+/// do not hold).
 const CACHE_VERSION: &str =
-    "lumiview scan cache 7: lvpack defaults, tm25 kernel estimate v2 (intensity widths capped at their median, \
-     cameras dense to the emission's edge, rays scaled to the header's total) with its proxy, manifest strict with a \
-     reconstructed proxy v4 (thin parts collapsed, free grazing plane, stray parts dropped, flat parts on the \
-     plane the images agree on)";
+    "lumiview scan cache 8: lvpack defaults, tm25 kernel estimate v3 (intensity widths capped at their median, \
+     cameras dense to the emission's edge, rays scaled to the header's total, k_s = 4 sqrt N) with its proxy, \
+     manifest strict with a reconstructed proxy v5 (thin parts collapsed, free grazing plane, stray parts dropped, \
+     flat parts on the plane the images agree on, outlines at the images' steps, occluded cameras left out, flat \
+     parts simplified)";
+
+/// The defaults a cached pack depends on, as text for its key: the ray-file estimate's rules and
+/// options, the reconstruction's and the pack's options.
+fn defaults_key() -> String {
+    format!(
+        "k_s = {} sqrt N, k_I = {} N^(2/3); {:?}; {:?}; {:?}",
+        raykde::DEFAULT_B,
+        raykde::DEFAULT_BI,
+        raykde::KdeOptions::default(),
+        crate::nearfield::reconstruct::ReconstructOptions::default(),
+        PackOptions::default()
+    )
+}
 
 /// Reads the first bytes of `path` and says which kind of scan file it is, or `None` for anything
 /// else (photometry, garbage).
@@ -218,6 +235,7 @@ pub fn cache_path(path: &Path, cache_dir: &Path) -> Result<PathBuf> {
         .map_or(0, |d| d.as_nanos());
     let key = fnv1a(&[
         CACHE_VERSION.as_bytes(),
+        defaults_key().as_bytes(),
         canonical.to_string_lossy().as_bytes(),
         &meta.len().to_le_bytes(),
         &mtime.to_le_bytes(),

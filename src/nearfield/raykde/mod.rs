@@ -21,7 +21,7 @@
 //! **Bandwidths** follow the data ([`bandwidth`]), each ray carrying the widths of its own direction
 //! (sample-point estimators: every kernel normalised per ray, the flux kept). With N_eff effective
 //! rays (Σ Φ)²/Σ Φ²: the intensity width holds k_I = 0.5·N_eff^(2/3) rays (a 2-D density's rate,
-//! width ∝ N^(−1/6)); the spatial kernel holds k_s = 8·√N_eff rays per pixel neighbourhood (noise
+//! width ∝ N^(−1/6)); the spatial kernel holds k_s = 4·√N_eff rays per pixel neighbourhood (noise
 //! ~1/√k_s, σ ∝ N^(−1/8), a 4-D density's rate) at the finest pyramid level that reaches them; the
 //! footprint pool holds k_S = √(k_s·N_eff) rays. Cameras sit about 0.7 intensity widths apart. The
 //! widths chosen are reported ([`KdeReport`]) and kept ([`KernelMaps`]) so a reference can be
@@ -65,8 +65,9 @@ pub const AUTO_TOTAL_PIXELS: u64 = 1 << 24;
 /// Most virtual cameras.
 pub const MAX_CAMERAS: usize = 20_000;
 
-/// Default rays per spatial kernel: k_s = `DEFAULT_B` · √N_eff.
-pub const DEFAULT_B: f64 = 8.0;
+/// Default rays per spatial kernel: k_s = `DEFAULT_B` · √N_eff (8 until 2026-11-27, which
+/// over-smoothed: docs/rayfiles.md, "Convergence").
+pub const DEFAULT_B: f64 = 4.0;
 
 /// Default rays per intensity kernel: k_I = `DEFAULT_BI` · N_eff^(2/3) (a 2-D estimate's rate).
 pub const DEFAULT_BI: f64 = 0.5;

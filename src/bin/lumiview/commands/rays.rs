@@ -45,7 +45,7 @@ pub struct Rays2scanArgs {
     /// nearest camera (noisy unless millions of rays land in each camera).
     #[arg(long, default_value = "kde", value_name = "kde|histogram")]
     pub method: String,
-    /// kde: rays per spatial kernel (default 8·√N: noise about 1/√ of it).
+    /// kde: rays per spatial kernel (default 4·√N: noise about 1/√ of it).
     #[arg(long, value_name = "K")]
     pub rays_per_kernel: Option<f64>,
     /// kde: rays per intensity kernel (default 0.5·N^(2/3)).
