@@ -91,8 +91,9 @@ pub struct SceneSettings {
     pub shadow_updates_per_frame: u32,
     /// Frames of up to this many pixels are lit once per pixel in a compute pass over the surface
     /// each pixel sees (a G-buffer of [`SURFACE_BYTES_PER_PIXEL`] a pixel, kept between frames of
-    /// one size); larger frames are lit per fragment as they are drawn (no per-pixel buffers,
-    /// but every fragment the depth test later hides is lit too). 0: always per fragment.
+    /// one size); larger frames, and frames whose images the device has no memory for, are lit
+    /// per fragment as they are drawn (no per-pixel buffers, but every fragment the depth test
+    /// later hides is lit too). 0: always per fragment.
     pub deferred_max_pixels: u64,
 }
 
@@ -1523,7 +1524,14 @@ impl Pass for ScenePass {
             ],
             indirect: [vpl_count, 0, 0, 0],
         };
-        let deferred = u64::from(target.width) * u64::from(target.height) <= settings.deferred_max_pixels;
+        // Lit once per pixel when the frame's per-pixel images fit; a device out of memory for
+        // them lights per fragment instead (the same frame, slower).
+        let deferred = u64::from(target.width) * u64::from(target.height) <= settings.deferred_max_pixels
+            && match self.surface_buffers(ctx, target.width, target.height) {
+                Ok(()) => true,
+                Err(GpuError::OutOfMemory(_)) => false,
+                Err(e) => return Err(e),
+            };
         let key = PipelineKey {
             color: target.color,
             depth_copy: target.depth == DepthFormat::R32Float,
@@ -1531,9 +1539,6 @@ impl Pass for ScenePass {
             deferred,
         };
         let pipeline = self.pipeline(ctx, key)?;
-        if deferred {
-            self.surface_buffers(ctx, target.width, target.height)?;
-        }
         let Some(mesh) = &self.mesh else {
             return Ok(SceneFrame::default());
         };
