@@ -1368,41 +1368,35 @@ impl ScenePass {
         }
         let p = ctx.scoped("creating a scene pipeline", || {
             let targets = &frame_color_targets(key.color, key.depth_copy);
-            if key.deferred {
-                return Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                    label: Some("scene composite"),
-                    layout: Some(&self.composite_pipeline_layout),
-                    vertex: wgpu::VertexState {
-                        module: &self.composite_module,
-                        entry_point: Some("vs_composite"),
-                        compilation_options: Default::default(),
-                        buffers: &[],
-                    },
-                    primitive: wgpu::PrimitiveState::default(),
-                    depth_stencil: Some(frame_depth_state(key.reversed_z)),
-                    multisample: wgpu::MultisampleState::default(),
-                    fragment: Some(wgpu::FragmentState {
-                        module: &self.composite_module,
-                        entry_point: Some(if key.depth_copy {
-                            "fs_composite"
-                        } else {
-                            "fs_composite_color_only"
-                        }),
-                        compilation_options: Default::default(),
-                        targets,
-                    }),
-                    multiview_mask: None,
-                    cache: None,
-                }));
-            }
+            // The compute lighting's composite (a full-screen triangle), or the triangles lit per
+            // fragment; the entry with the R32F depth output when the target has one.
+            let (label, layout, module, vs, buffers, fs) = if key.deferred {
+                (
+                    "scene composite",
+                    &self.composite_pipeline_layout,
+                    &self.composite_module,
+                    "vs_composite",
+                    &[][..],
+                    ["fs_composite", "fs_composite_color_only"],
+                )
+            } else {
+                (
+                    "scene lighting",
+                    &self.pipeline_layout,
+                    &self.module,
+                    "vs_scene",
+                    &[Some(SCENE_LAYOUT)][..],
+                    ["fs_scene", "fs_scene_color_only"],
+                )
+            };
             Ok(ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("scene lighting"),
-                layout: Some(&self.pipeline_layout),
+                label: Some(label),
+                layout: Some(layout),
                 vertex: wgpu::VertexState {
-                    module: &self.module,
-                    entry_point: Some("vs_scene"),
+                    module,
+                    entry_point: Some(vs),
                     compilation_options: Default::default(),
-                    buffers: &[Some(SCENE_LAYOUT)],
+                    buffers,
                 },
                 primitive: wgpu::PrimitiveState {
                     cull_mode: None,
@@ -1411,12 +1405,8 @@ impl ScenePass {
                 depth_stencil: Some(frame_depth_state(key.reversed_z)),
                 multisample: wgpu::MultisampleState::default(),
                 fragment: Some(wgpu::FragmentState {
-                    module: &self.module,
-                    entry_point: Some(if key.depth_copy {
-                        "fs_scene"
-                    } else {
-                        "fs_scene_color_only"
-                    }),
+                    module,
+                    entry_point: Some(fs[usize::from(!key.depth_copy)]),
                     compilation_options: Default::default(),
                     targets,
                 }),
