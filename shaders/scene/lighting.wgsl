@@ -1,10 +1,12 @@
 // Scene lighting pass (issue 20; docs/scene-lighting.md, "The GPU pass" and "Inter-reflection"):
-// the scene's triangles drawn from the host's camera, each fragment lit by every photometric
-// luminaire whose influence sphere reaches it (the fragment's screen tile lists them), with
-// visibility from the luminaires' cube shadow maps, plus the inter-reflected light of the virtual
-// point lights (scene::vpl), reflectance from the base colour and its texture. Output: L = ρ·E/π
-// per RGB channel (Lambertian; the luminance Y of the colour is ρ_Y·E/π in cd/m²), or its
-// Reinhard-tone-mapped display value; plus the R32F depth.
+// the scene's triangles drawn from the host's camera into the surface each pixel sees (fs_surface),
+// each pixel then lit once (cs_lighting; or each fragment as it is drawn, fs_scene, for frames
+// too large for the per-pixel images) by every photometric luminaire whose influence sphere reaches
+// it (the pixel's screen tile lists them), with visibility from the luminaires' cube shadow maps,
+// plus the inter-reflected light of the virtual point lights (scene::vpl), reflectance from the
+// base colour and its texture. Output: L = ρ·E/π per RGB channel (Lambertian; the luminance Y of
+// the colour is ρ_Y·E/π in cd/m²), or its Reinhard-tone-mapped display value; plus the R32F depth
+// (shaders/scene/composite.wgsl writes the compute lighting's pixels into the frame).
 //
 // Direct illuminance of one luminaire at x (normal n, turned towards the eye): its opening is cut
 // into na × nb stratified points s_k (the midpoints of the cells of its parameterisation, uniform
