@@ -52,6 +52,8 @@ pub struct Estimate {
 }
 
 /// One level: a square grid of side `n` with its values.
+/// Either grid may be empty: the pilot's levels carry only the counts, the spread's only the
+/// values.
 struct Level {
     n: usize,
     w: Vec<f64>,
@@ -59,7 +61,8 @@ struct Level {
 }
 
 impl Level {
-    /// Blurs by [1 2 1]/4 in x and y (clamped at the border: the total is kept) and sums 2 × 2.
+    /// Blurs by [1 2 1]/4 in x and y (clamped at the border: the total is kept) and sums 2 × 2 (an
+    /// empty grid stays empty).
     fn down(&self) -> Level {
         let n = self.n;
         let blur = |v: &[f64]| -> Vec<f64> {
@@ -95,6 +98,9 @@ impl Level {
         };
         let m = n.div_ceil(2);
         let sum = |v: &[f64]| -> Vec<f64> {
+            if v.is_empty() {
+                return Vec::new();
+            }
             let b = blur(v);
             let mut out = vec![0.0; m * m];
             for y in 0..n {
@@ -156,22 +162,18 @@ impl Level {
         }
     }
 
-    /// Bilinear read at base pixel centre (bx, by) of a level 2^k coarser, as per-base-pixel values.
-    fn read(&self, k: u32, bx: usize, by: usize) -> (f64, f64) {
+    /// The count at base pixel centre (bx, by) of a level 2^k coarser, read bilinearly.
+    fn count(&self, k: u32, bx: usize, by: usize) -> f64 {
         let s = f64::from(1u32 << k);
         let fx = ((bx as f64 + 0.5) / s - 0.5).clamp(0.0, (self.n - 1) as f64);
         let fy = ((by as f64 + 0.5) / s - 0.5).clamp(0.0, (self.n - 1) as f64);
         let (x0, y0) = (fx.floor() as usize, fy.floor() as usize);
         let (x1, y1) = ((x0 + 1).min(self.n - 1), (y0 + 1).min(self.n - 1));
         let (tx, ty) = (fx - x0 as f64, fy - y0 as f64);
-        let at = |v: &[f64], x: usize, y: usize| v[y * self.n + x];
-        let lerp = |v: &[f64]| {
-            let a = at(v, x0, y0) * (1.0 - tx) + at(v, x1, y0) * tx;
-            let b = at(v, x0, y1) * (1.0 - tx) + at(v, x1, y1) * tx;
-            a * (1.0 - ty) + b * ty
-        };
-        let area = s * s;
-        (lerp(&self.w) / area, lerp(&self.c))
+        let at = |x: usize, y: usize| self.c[y * self.n + x];
+        let a = at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx;
+        let b = at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx;
+        a * (1.0 - ty) + b * ty
     }
 }
 
@@ -229,10 +231,11 @@ impl Pyramid {
     pub fn estimate(self, k_s: f64, fixed_level: Option<f64>) -> Estimate {
         let (px, side) = (self.px, self.side);
         let total: f64 = self.c.iter().sum();
-        let base_w = self.w.clone();
+        let base_w = self.w;
+        // The pilot's levels: counts only (the light is spread by `finish`).
         let mut levels = vec![Level {
             n: side,
-            w: self.w,
+            w: Vec::new(),
             c: self.c,
         }];
         while levels[levels.len() - 1].n > 1 {
@@ -254,7 +257,7 @@ impl Pyramid {
         for by in 0..px {
             for bx in 0..px {
                 let i = by * side + bx;
-                let count = |k: usize| levels[k].read(k as u32, bx, by).1 * AREA_FACTOR;
+                let count = |k: usize| levels[k].count(k as u32, bx, by) * AREA_FACTOR;
                 let l = match fixed_level {
                     Some(f) => f.clamp(0.0, top as f64),
                     None => {
@@ -382,7 +385,7 @@ pub fn spread_by_level(px: usize, w: &[f64], level: &[f32]) -> Vec<f64> {
         let mut lv = Level {
             n: px,
             w: part,
-            c: vec![0.0; px * px],
+            c: Vec::new(),
         };
         for _ in 0..k {
             lv = lv.down();
