@@ -265,7 +265,11 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         .par_iter()
         .enumerate()
         .map(|(i, cam)| {
-            let est = gather.camera(cam, dirs[i], &intrinsics, k_s, fixed_level);
+            let mut est = gather.camera(cam, dirs[i], &intrinsics, k_s, fixed_level);
+            if !opts.keep_kernel_levels {
+                // As large as the image: held for every camera only when an evaluation asks.
+                est.1 = Vec::new();
+            }
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             if n.is_multiple_of(16) {
                 progress("estimating", 0.2 + 0.7 * n as f64 / m as f64);
@@ -273,6 +277,8 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
             est
         })
         .collect();
+    // The rays' index by direction (4 bytes a ray) is not read again.
+    drop(cells);
     // Flux held by the images, with each camera's Voronoi solid angle.
     let lookup = NearestDirection::new(&dirs);
     let (omega, _) = lookup.solid_angles();
