@@ -572,8 +572,9 @@ fn luminance_legend(width: u32, exposure: f32, transparent: bool) -> Result<Vec<
         width_px: width.max(160),
         min: 0.0204 / e,
         max: 49.0 / e,
+        // Short enough for a 360 px still (the exposure is 1 / the 50 % grey luminance).
         caption: format!(
-            "luminance in cd/m², exposure {exposure:e} m²/cd (1/exposure = {:.0} cd/m² is 50 % grey){}",
+            "luminance in cd/m² (50 % grey at {:.2e}{})",
             1.0 / e,
             if transparent { "" } else { "; black: no light" }
         ),
