@@ -19,11 +19,11 @@ use glam::DVec2;
 /// σ in base pixels of the level-k kernel divided by 2^k (level 0's bilinear tent is narrower).
 pub const LEVEL_SIGMA_PX: f64 = 0.7;
 
-/// The finest level the estimator chooses by itself: level 0 is the bilinear splat's tent, one
-/// pixel wide, which the renderer's bilinear magnification shows as a diamond; level 1 (σ ≈ 1.4
-/// px) is the first that spreads a point into a round spot. Where more rays than k_s fall within
-/// it, the image is too coarse for the data (the image budget) and the kernel is that level.
-pub const MIN_CHOSEN_LEVEL: f64 = 1.0;
+/// The level that spreads a source smaller than a pixel: level 0 is the bilinear splat's tent,
+/// one pixel wide, which the renderer's bilinear magnification shows as a diamond; level 1 (σ ≈ 1.4
+/// px) is the first that spreads a point into a round spot. (Extended sources keep the level their
+/// rays choose, 0 included: a small bright feature's core is sharper at level 0.)
+pub const POINT_LEVEL: f64 = 1.0;
 
 /// Pixels' worth of rays a kernel of σ = `LEVEL_SIGMA_PX` · 2^k holds, over 4^k: 4π σ² / 4^k.
 const AREA_FACTOR: f64 = 4.0 * std::f64::consts::PI * LEVEL_SIGMA_PX * LEVEL_SIGMA_PX;
@@ -230,8 +230,7 @@ impl Pyramid {
     }
 
     /// The per-pixel estimate. A pilot pass finds, at each pixel, the finest level whose
-    /// neighbourhood holds `k_s` rays (blended between levels, at least [`MIN_CHOSEN_LEVEL`]; or
-    /// `fixed_level` everywhere); then
+    /// neighbourhood holds `k_s` rays (blended between levels; or `fixed_level` everywhere); then
     /// the light splatted at each pixel is spread with its own pixel's kernel (a sample-point
     /// estimator: a bright spot keeps its narrow kernel while the sparse pixels around it spread
     /// only their own light, and the total is kept exactly).
@@ -294,11 +293,6 @@ impl Pyramid {
                             })
                         }
                     }
-                };
-                let l = if fixed_level.is_some() {
-                    l
-                } else {
-                    l.max(MIN_CHOSEN_LEVEL.min(top as f64))
                 };
                 level[i] = l as f32;
             }
@@ -503,8 +497,9 @@ mod tests {
     fn one_ray_spreads_into_a_round_spot() {
         // A point source renders as a spot of its kernel: round, not the diamond of a bilinear
         // read of the coarse level (which measured a diagonal / axis radius of 0.88 at half the
-        // maximum, level 3).
-        for k in 3..=5u32 {
+        // maximum, level 3). Level 1 is the kernel of a source smaller than a pixel (POINT_LEVEL).
+        assert_eq!(POINT_LEVEL, 1.0);
+        for k in 1..=5u32 {
             for c in [60usize, 64, 67] {
                 let mut p = Pyramid::new(128);
                 p.splat(DVec2::new(c as f64 + 0.5, c as f64 + 0.5), 1.0, 1.0);
@@ -522,38 +517,6 @@ mod tests {
                     );
                 }
             }
-        }
-    }
-
-    #[test]
-    fn a_point_with_rays_to_spare_spreads_round_at_the_finest_chosen_level() {
-        // Every ray from one point (a far-field ray file): the rays would allow level 0, the
-        // bilinear tent, which renders as a diamond; the estimator stops at level 1, a round spot.
-        for c in [60.5f64, 64.0, 67.25] {
-            let mut p = Pyramid::new(128);
-            for _ in 0..4000 {
-                p.splat(DVec2::new(c, c + 0.3), 1.0, 1.0);
-            }
-            let e = p.estimate(100.0, None);
-            let lit: Vec<f32> = e
-                .level
-                .iter()
-                .zip(&e.density)
-                .filter(|(_, d)| **d > 0.0)
-                .map(|(l, _)| *l)
-                .collect();
-            assert!(lit.iter().all(|l| f64::from(*l) >= MIN_CHOSEN_LEVEL), "{lit:?}");
-            // The pixels the rays landed on: exactly the finest chosen level.
-            let (x, y) = ((c - 0.5).floor() as usize, (c + 0.3 - 0.5).floor() as usize);
-            assert_eq!(f64::from(e.level[y * 128 + x]), MIN_CHOSEN_LEVEL);
-            for level in [0.5, 0.1] {
-                let (axes, diagonals) = contour_radii(&e, 128, level);
-                let ratio = diagonals / axes;
-                assert!((0.9..=1.1).contains(&ratio), "pixel {c}, contour {level}: {ratio}");
-                assert!(axes > 1.4, "pixel {c}, contour {level}: {axes} px");
-            }
-            let total: f64 = e.density.iter().sum();
-            assert!((total - 4000.0).abs() < 1e-6 * 4000.0, "{total}");
         }
     }
 

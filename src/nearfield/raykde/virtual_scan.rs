@@ -7,7 +7,7 @@ use rayon::prelude::*;
 
 use super::bandwidth::{Bandwidths, RaySummary};
 use super::gather::{CameraEstimate, Gather};
-use super::pyramid::LEVEL_SIGMA_PX;
+use super::pyramid::{LEVEL_SIGMA_PX, POINT_LEVEL};
 use super::{
     check_options, hull, FrozenKernels, KdeOptions, KdeReport, KdeScan, KernelMaps, Spread, AUTO_TOTAL_PIXELS,
     MAX_AUTO_PX, MAX_TOTAL_PIXELS,
@@ -17,12 +17,13 @@ use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::rayset::{Camera, CaptureSphere, Hemisphere, Intrinsics, MemorySource, RayImageSet, Scan};
 use crate::nearfield::tm25::{LuminousSource, RayFile, RayFlux};
 
-/// The least the bounding proxy grows past the ray origins, in capture pixels: the finest chosen
-/// kernel (level 1, [`super::pyramid::MIN_CHOSEN_LEVEL`]) spreads a ray up to 4 pixels from it
-/// (the splat's pixel and three of B-spline subdivision), and the renderer's bilinear read reaches
-/// one more. A proxy that ends sooner cuts off light: a point source lost 6 % of its intensity with
-/// 3 pixels.
-const PROXY_MIN_GROW_PX: f64 = 5.0;
+/// The least the bounding proxy grows past the ray origins, in capture pixels: a level-0 kernel
+/// reaches a pixel past its ray and the renderer's bilinear read one more (3 leaves a margin); the
+/// level-1 kernel of a source smaller than a pixel ([`POINT_LEVEL`]) reaches 4 (the splat's pixel
+/// and three of B-spline subdivision), and the read one more. A proxy that ends sooner cuts off
+/// light: the point source lost 6 % of its intensity with 3 pixels at level 1.
+const PROXY_MIN_GROW_PX: f64 = 3.0;
+const POINT_PROXY_MIN_GROW_PX: f64 = 5.0;
 
 /// The rays of a file as plain numbers (metres, unit directions, lm), in file order.
 struct Rays<'a> {
@@ -264,9 +265,14 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     let pixel_area = pixel_m * pixel_m;
     let done = std::sync::atomic::AtomicUsize::new(0);
     let m = cameras.len();
+    // A source smaller than a capture pixel (a far-field ray file: every ray from one point) has no
+    // shape for the spatial kernels to follow: it is spread as a round spot, the finest the
+    // pyramid makes (the rays would choose level 0, a diamond when magnified).
+    let point = source.radius < 0.5 * pixel_m;
     let fixed_level = opts
         .spatial_kernel_m
-        .map(|s| (s / pixel_m / LEVEL_SIGMA_PX).log2().max(0.0));
+        .map(|s| (s / pixel_m / LEVEL_SIGMA_PX).log2().max(0.0))
+        .or(point.then_some(POINT_LEVEL));
     progress("estimating", 0.2);
     let per_camera: Vec<CameraEstimate> = cameras
         .par_iter()
@@ -340,7 +346,12 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         ));
     }
     progress("proxy", 0.95);
-    let grow = (2.0 * spatial_spread.p90).max(PROXY_MIN_GROW_PX * pixel_m);
+    let min_grow_px = if point && opts.spatial_kernel_m.is_none() {
+        POINT_PROXY_MIN_GROW_PX
+    } else {
+        PROXY_MIN_GROW_PX
+    };
+    let grow = (2.0 * spatial_spread.p90).max(min_grow_px * pixel_m);
     let proxy = source.proxy(grow, "ray origins, grown by two spatial kernels");
     let report = KdeReport {
         rays: raw.len() as u64,
