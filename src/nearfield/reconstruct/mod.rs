@@ -36,9 +36,9 @@
 //!
 //! Luminance consistency is used for flat parts only: a curved emitter keeps its carved surface,
 //! about a cell off, and what is hidden behind a lit surface from every camera is filled in. Pure
-//! CPU, both cores (rayon); memory is the masks (a few tens of KB per camera), one byte per finest
+//! CPU, both cores (rayon); memory is the masks (a few tens of KB per camera), one bit per finest
 //! cell, one octree level's split cells and the refinement's cropped images (at most
-//! [`REFINE_PIXELS`]), whatever the number of images.
+//! [`REFINE_PIXELS`], two bytes each), whatever the number of images.
 
 pub mod carve;
 pub mod hemisphere;
@@ -456,7 +456,7 @@ pub fn reconstruct(
                 Ok(refine::Shot {
                     camera: set.cameras[i].clone(),
                     intrinsics,
-                    image,
+                    image: refine::Crop::of(&image),
                 })
             })
             .collect::<Result<_>>()?;
@@ -544,7 +544,8 @@ fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> 
 /// Cameras read again for [`refine`], at most ...
 pub const REFINE_CAMERAS: usize = 64;
 /// ... and as many as hold at most this many pixels together (each image cut to where the content
-/// can be; 32 MiB of f32, 6.8 whole full-size 1216 × 1021 images), but at least 16.
+/// can be; 16 MiB as the refinement holds them (f16), 6.8 whole full-size 1216 × 1021 images), but
+/// at least 16.
 pub const REFINE_PIXELS: usize = 1 << 23;
 
 /// One carving rule's result, meshed and checked.

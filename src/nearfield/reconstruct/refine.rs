@@ -87,7 +87,45 @@ pub struct Shot {
     /// Intrinsics.
     pub intrinsics: Intrinsics,
     /// Luminance (cd/m²).
-    pub image: LuminanceImage,
+    pub image: Crop,
+}
+
+/// An image as the refinement holds it: f16 relative to its largest value, half the memory of
+/// f32 (the refinement holds up to [`super::REFINE_PIXELS`] pixels at once). The relative
+/// precision, 2⁻¹¹, is far below the disagreement between cameras that the refinement weighs;
+/// values below 2⁻²⁴ of the largest read as dark.
+#[derive(Debug, Clone)]
+pub struct Crop {
+    width: u32,
+    height: u32,
+    /// The image's largest finite value (cd/m²; 1 for a dark image).
+    scale: f32,
+    data: Vec<half::f16>,
+}
+
+impl Crop {
+    /// `img` held as f16 (non-finite and negative values as dark).
+    pub fn of(img: &LuminanceImage) -> Self {
+        let clean = |v: f32| if v.is_finite() { v.max(0.0) } else { 0.0 };
+        let max = img.data.iter().fold(0.0f32, |m, v| m.max(clean(*v)));
+        let scale = if max > 0.0 { max } else { 1.0 };
+        Self {
+            width: img.width,
+            height: img.height,
+            scale,
+            data: img
+                .data
+                .iter()
+                .map(|v| half::f16::from_f32(clean(*v) / scale))
+                .collect(),
+        }
+    }
+
+    /// Luminance (cd/m²) of pixel (x, y), inside the image.
+    fn get(&self, x: u32, y: u32) -> f32 {
+        let i = y as usize * self.width as usize + x as usize;
+        self.data.get(i).map_or(0.0, |v| v.to_f32() * self.scale)
+    }
 }
 
 /// What [`refine_flat_parts`] did to one flat part.
@@ -255,8 +293,11 @@ fn snap_outline(
     if steep.len() < 3 {
         return;
     }
-    // Edges of the part's triangles: (facing sign, third vertex) per triangle.
-    let mut edges: BTreeMap<(u32, u32), Vec<(f64, u32)>> = BTreeMap::new();
+    // Edges of the part's triangles: (edge, third vertex, facing sign) per triangle, sorted by edge
+    // (a stable sort: each edge's triangles stay in mesh order). Flat vectors rather than maps of
+    // vectors: the part can be the whole unsimplified mesh (10⁵ triangles), and this is the
+    // reconstruction's peak.
+    let mut edges: Vec<((u32, u32), u32, i8)> = Vec::new();
     for t in &mesh.triangles {
         if !t.iter().all(|&i| on.contains(&(i as usize))) {
             continue;
@@ -266,40 +307,49 @@ fn snap_outline(
         if n.length_squared() < 1e-24 {
             continue;
         }
-        let sign = n.dot(normal).signum();
+        let sign: i8 = if n.dot(normal).is_sign_negative() { -1 } else { 1 };
         for k in 0..3 {
             let (p, q, r) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            edges.entry((p.min(q), p.max(q))).or_default().push((sign, r));
+            edges.push(((p.min(q), p.max(q)), r, sign));
         }
     }
+    edges.sort_by_key(|e| e.0);
     let mut outward: BTreeMap<u32, DVec3> = BTreeMap::new();
     let mut along: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for ((p, q), tris) in &edges {
-        if tris.len() != 2 || tris[0].0 == tris[1].0 {
+    for tris in edges.chunk_by(|a, b| a.0 == b.0) {
+        if tris.len() != 2 || tris[0].2 == tris[1].2 {
             continue;
         }
-        along.entry(*p).or_default().push(*q);
-        along.entry(*q).or_default().push(*p);
-        let (vp, vq) = (mesh.vertices[*p as usize], mesh.vertices[*q as usize]);
+        let (p, q) = tris[0].0;
+        along.entry(p).or_default().push(q);
+        along.entry(q).or_default().push(p);
+        let (vp, vq) = (mesh.vertices[p as usize], mesh.vertices[q as usize]);
         let mut u = normal.cross(vq - vp).normalize_or_zero();
         let inner = mesh.vertices[tris[0].1 as usize] - 0.5 * (vp + vq);
         if u.dot(inner) > 0.0 {
             u = -u;
         }
-        for v in [*p, *q] {
+        for v in [p, q] {
             *outward.entry(v).or_insert(DVec3::ZERO) += u;
         }
     }
-    // Neighbours on the plane.
-    let mut around: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
+    drop(edges);
+    // Neighbours on the plane: (vertex, neighbour) pairs sorted (stably) by vertex.
+    let mut around: Vec<(u32, u32)> = Vec::new();
     for t in &mesh.triangles {
         if t.iter().all(|&i| on.contains(&(i as usize))) {
             for k in 0..3 {
-                around.entry(t[k]).or_default().push(t[(k + 1) % 3]);
-                around.entry(t[(k + 1) % 3]).or_default().push(t[k]);
+                around.push((t[k], t[(k + 1) % 3]));
+                around.push((t[(k + 1) % 3], t[k]));
             }
         }
     }
+    around.sort_by_key(|e| e.0);
+    let around_of = |x: u32| {
+        let lo = around.partition_point(|e| e.0 < x);
+        let hi = around.partition_point(|e| e.0 <= x);
+        around[lo..hi].iter().map(|e| e.1)
+    };
     let moves: Vec<(u32, DVec3)> = outward
         .par_iter()
         .filter_map(|(&v, &u)| {
@@ -389,7 +439,7 @@ fn snap_outline(
         while !ring.is_empty() {
             let mut next = Vec::new();
             for x in ring {
-                for &w in around.get(&x).into_iter().flatten() {
+                for w in around_of(x) {
                     if !seen.insert(w) || moves.contains_key(&w) {
                         continue;
                     }
@@ -566,7 +616,7 @@ impl Sight {
 }
 
 /// Bilinear luminance at pixel coordinates (u, v) (pixel centres at +0.5), `None` outside.
-fn sample(img: &LuminanceImage, u: f64, v: f64) -> Option<f64> {
+fn sample(img: &Crop, u: f64, v: f64) -> Option<f64> {
     let (x, y) = (u - 0.5, v - 0.5);
     if !(x >= 0.0 && y >= 0.0 && x <= f64::from(img.width) - 1.0 && y <= f64::from(img.height) - 1.0) {
         return None;
@@ -758,7 +808,7 @@ mod tests {
                 principal_px: glam::DVec2::splat(4.0),
                 focal_px: glam::DVec2::splat(8.0),
             },
-            image: LuminanceImage::zeros(8, 8),
+            image: Crop::of(&LuminanceImage::zeros(8, 8)),
         };
         let below = shot(DVec3::new(0.0, 0.0, -1.0));
         let aside = shot(DVec3::new(1.0, 0.0, -0.3));
