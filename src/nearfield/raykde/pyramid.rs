@@ -21,9 +21,10 @@ pub const LEVEL_SIGMA_PX: f64 = 0.7;
 
 /// The level that spreads a source smaller than a pixel: level 0 is the bilinear splat's tent,
 /// one pixel wide, which the renderer's bilinear magnification shows as a diamond; level 1 (σ ≈ 1.4
-/// px) is the first that spreads a point into a round spot. (Extended sources keep the level their
+/// px, four pixels across) is round in the image but still a rounded square once magnified; level
+/// 2 (σ ≈ 2.8 px) is the first that renders as a round spot. (Extended sources keep the level their
 /// rays choose, 0 included: a small bright feature's core is sharper at level 0.)
-pub const POINT_LEVEL: f64 = 1.0;
+pub const POINT_LEVEL: f64 = 2.0;
 
 /// Pixels' worth of rays a kernel of σ = `LEVEL_SIGMA_PX` · 2^k holds, over 4^k: 4π σ² / 4^k.
 const AREA_FACTOR: f64 = 4.0 * std::f64::consts::PI * LEVEL_SIGMA_PX * LEVEL_SIGMA_PX;
@@ -497,8 +498,8 @@ mod tests {
     fn one_ray_spreads_into_a_round_spot() {
         // A point source renders as a spot of its kernel: round, not the diamond of a bilinear
         // read of the coarse level (which measured a diagonal / axis radius of 0.88 at half the
-        // maximum, level 3). Level 1 is the kernel of a source smaller than a pixel (POINT_LEVEL).
-        assert_eq!(POINT_LEVEL, 1.0);
+        // maximum, level 3). Level 2 is the kernel of a source smaller than a pixel (POINT_LEVEL).
+        assert_eq!(POINT_LEVEL, 2.0);
         for k in 1..=5u32 {
             for c in [60usize, 64, 67] {
                 let mut p = Pyramid::new(128);

@@ -19,11 +19,11 @@ use crate::nearfield::tm25::{LuminousSource, RayFile, RayFlux};
 
 /// The least the bounding proxy grows past the ray origins, in capture pixels: a level-0 kernel
 /// reaches a pixel past its ray and the renderer's bilinear read one more (3 leaves a margin); the
-/// level-1 kernel of a source smaller than a pixel ([`POINT_LEVEL`]) reaches 4 (the splat's pixel
-/// and three of B-spline subdivision), and the read one more. A proxy that ends sooner cuts off
-/// light: the point source lost 6 % of its intensity with 3 pixels at level 1.
+/// level-2 kernel of a source smaller than a pixel ([`POINT_LEVEL`]) keeps 10⁻⁴ of its light
+/// beyond 11 pixels (measured), and the read reaches one more. A proxy that ends sooner cuts off
+/// light (the point source lost 6 % of its intensity with 3 pixels at level 1).
 const PROXY_MIN_GROW_PX: f64 = 3.0;
-const POINT_PROXY_MIN_GROW_PX: f64 = 5.0;
+const POINT_PROXY_MIN_GROW_PX: f64 = 12.0;
 
 /// The rays of a file as plain numbers (metres, unit directions, lm), in file order.
 struct Rays<'a> {
