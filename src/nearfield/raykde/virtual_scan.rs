@@ -17,13 +17,17 @@ use crate::nearfield::error::{NearfieldError, Result};
 use crate::nearfield::rayset::{Camera, CaptureSphere, Hemisphere, Intrinsics, MemorySource, RayImageSet, Scan};
 use crate::nearfield::tm25::{LuminousSource, RayFile, RayFlux};
 
-/// The least the bounding proxy grows past the ray origins, in capture pixels: a level-0 kernel
-/// reaches a pixel past its ray and the renderer's bilinear read one more (3 leaves a margin); the
-/// level-2 kernel of a source smaller than a pixel ([`POINT_LEVEL`]) keeps 10⁻⁴ of its light
-/// beyond 11 pixels (measured), and the read reaches one more. A proxy that ends sooner cuts off
-/// light (the point source lost 6 % of its intensity with 3 pixels at level 1).
+/// The least the bounding proxy grows past the ray origins, in capture pixels, where the kernels
+/// follow the rays: a level-0 kernel reaches a pixel past its ray and the renderer's bilinear read
+/// one more (3 leaves a margin). A kernel fixed at one level (given by the user, or a source smaller
+/// than a pixel, [`POINT_LEVEL`]) reaches [`FIXED_REACH_SIGMAS`] of its σ plus that pixel of the
+/// read. A proxy that ends sooner cuts off light: the point source lost 6 % of its intensity with
+/// 3 pixels at level 1.
 const PROXY_MIN_GROW_PX: f64 = 3.0;
-const POINT_PROXY_MIN_GROW_PX: f64 = 12.0;
+
+/// How far a kernel of one level spreads, in its σ: it leaves 3·10⁻⁴ of its light beyond 3.6 σ
+/// at level 1 and 10⁻⁴ beyond 3.9 σ at level 2 (measured on one ray).
+const FIXED_REACH_SIGMAS: f64 = 4.0;
 
 /// The rays of a file as plain numbers (metres, unit directions, lm), in file order.
 struct Rays<'a> {
@@ -346,10 +350,9 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
         ));
     }
     progress("proxy", 0.95);
-    let min_grow_px = if point && opts.spatial_kernel_m.is_none() {
-        POINT_PROXY_MIN_GROW_PX
-    } else {
-        PROXY_MIN_GROW_PX
+    let min_grow_px = match fixed_level {
+        Some(l) => (FIXED_REACH_SIGMAS * LEVEL_SIGMA_PX * 2f64.powf(l) + 1.0).max(PROXY_MIN_GROW_PX),
+        None => PROXY_MIN_GROW_PX,
     };
     let grow = (2.0 * spatial_spread.p90).max(min_grow_px * pixel_m);
     let proxy = source.proxy(grow, "ray origins, grown by two spatial kernels");
