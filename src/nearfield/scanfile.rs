@@ -60,7 +60,7 @@ const SNIFF_BYTES: usize = 4096;
 const CACHE_VERSION: &str =
     "lumiview scan cache 10: lvpack defaults, tm25 kernel estimate v5 (intensity widths capped at their median, \
      cameras dense to the emission's edge, rays scaled to the header's total, k_s = 4 sqrt N, the spatial kernel \
-     spread back by B-spline subdivision, a source within a pixel spread at level 2) with its proxy, \
+     spread back by B-spline subdivision, a source within a pixel spread at level 2) with its proxy (4 sigma past a fixed kernel), \
      manifest strict with a reconstructed proxy v5 (thin parts collapsed, free grazing plane, stray parts dropped, \
      flat parts on the plane the images agree on, outlines at the images' steps, occluded cameras left out, flat \
      parts simplified)";
