@@ -270,8 +270,8 @@ pub fn estimate(file: &RayFile, opts: &KdeOptions, progress: &(dyn Fn(&str, f64)
     let done = std::sync::atomic::AtomicUsize::new(0);
     let m = cameras.len();
     // A source smaller than a capture pixel (a far-field ray file: every ray from one point) has no
-    // shape for the spatial kernels to follow: it is spread as a round spot, the finest the
-    // pyramid makes (the rays would choose level 0, a diamond when magnified).
+    // shape for the spatial kernels to follow: it is spread as a round spot, at the first level
+    // that renders round (the rays would choose level 0, a diamond when magnified).
     let point = source.radius < 0.5 * pixel_m;
     let fixed_level = opts
         .spatial_kernel_m
