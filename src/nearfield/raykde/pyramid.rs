@@ -72,37 +72,8 @@ impl Level {
     /// empty grid stays empty).
     fn down(&self) -> Level {
         let n = self.n;
-        let blur = |v: &[f64]| -> Vec<f64> {
-            let mut t = vec![0.0; n * n];
-            for y in 0..n {
-                for x in 0..n {
-                    let a = v[y * n + x];
-                    if a == 0.0 {
-                        continue;
-                    }
-                    let xl = x.saturating_sub(1);
-                    let xr = (x + 1).min(n - 1);
-                    t[y * n + xl] += 0.25 * a;
-                    t[y * n + x] += 0.5 * a;
-                    t[y * n + xr] += 0.25 * a;
-                }
-            }
-            let mut u = vec![0.0; n * n];
-            for y in 0..n {
-                let yl = y.saturating_sub(1);
-                let yr = (y + 1).min(n - 1);
-                for x in 0..n {
-                    let a = t[y * n + x];
-                    if a == 0.0 {
-                        continue;
-                    }
-                    u[yl * n + x] += 0.25 * a;
-                    u[y * n + x] += 0.5 * a;
-                    u[yr * n + x] += 0.25 * a;
-                }
-            }
-            u
-        };
+        let taps = |i: usize| [(i.saturating_sub(1), 0.25), (i, 0.5), ((i + 1).min(n - 1), 0.25)];
+        let blur = |v: &[f64]| scatter_separable(v, n, n, taps);
         let m = n.div_ceil(2);
         let sum = |v: &[f64]| -> Vec<f64> {
             if v.is_empty() {
@@ -133,35 +104,12 @@ impl Level {
         let n = self.n;
         let m = 2 * n;
         const W: [f64; 4] = [0.125, 0.375, 0.375, 0.125];
-        let fine = |i: usize, d: usize| -> usize { (2 * i + d).saturating_sub(1).min(m - 1) };
-        let expand = |v: &[f64]| -> Vec<f64> {
-            // Along x into an m × n grid, then along y into m × m.
-            let mut t = vec![0.0; m * n];
-            for y in 0..n {
-                for x in 0..n {
-                    let a = v[y * n + x];
-                    if a == 0.0 {
-                        continue;
-                    }
-                    for (d, w) in W.iter().enumerate() {
-                        t[y * m + fine(x, d)] += w * a;
-                    }
-                }
-            }
-            let mut u = vec![0.0; m * m];
-            for y in 0..n {
-                for x in 0..m {
-                    let a = t[y * m + x];
-                    if a == 0.0 {
-                        continue;
-                    }
-                    for (d, w) in W.iter().enumerate() {
-                        u[fine(y, d) * m + x] += w * a;
-                    }
-                }
-            }
-            u
+        // Clamped at the border, so the shares folded back keep the total.
+        let taps = |i: usize| {
+            let fine = |d: usize| (2 * i + d).saturating_sub(1).min(m - 1);
+            [(fine(0), W[0]), (fine(1), W[1]), (fine(2), W[2]), (fine(3), W[3])]
         };
+        let expand = |v: &[f64]| scatter_separable(v, n, m, taps);
         Level {
             n: m,
             w: expand(&self.w),
@@ -359,6 +307,43 @@ fn mass_bin(level: f64) -> usize {
 
 fn bin_level(b: usize) -> f64 {
     b as f64 / 8.0
+}
+
+/// Scatters the `n` × `n` grid `v` into an `m` × `m` one, separably: each value's share `w` goes to
+/// every `(j, w)` of `taps(i)` along x, then the same along y (zeros skipped). [`Level::down`]'s
+/// blur and [`Level::up`]'s subdivision.
+fn scatter_separable<const K: usize>(
+    v: &[f64],
+    n: usize,
+    m: usize,
+    taps: impl Fn(usize) -> [(usize, f64); K],
+) -> Vec<f64> {
+    let mut t = vec![0.0; n * m];
+    for y in 0..n {
+        for x in 0..n {
+            let a = v[y * n + x];
+            if a == 0.0 {
+                continue;
+            }
+            for (j, w) in taps(x) {
+                t[y * m + j] += w * a;
+            }
+        }
+    }
+    let mut u = vec![0.0; m * m];
+    for y in 0..n {
+        let to = taps(y);
+        for x in 0..m {
+            let a = t[y * m + x];
+            if a == 0.0 {
+                continue;
+            }
+            for (j, w) in to {
+                u[j * m + x] += w * a;
+            }
+        }
+    }
+    u
 }
 
 /// Spreads the values `w` of a `px` × `px` grid (`px` a power of two), each with the kernel of its
