@@ -378,8 +378,24 @@ pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
 /// whose inward line runs along it) stay. Then the moves are smoothed over neighbours (two passes
 /// of averaging the displacement) so that the collapsed sheet keeps no stair steps.
 ///
+/// A beam's lens is different (`axes`: per vertex, the axis of the beam its part emits, or `None`):
+/// a flat source seen only from a cone of directions about `a` carves to the double cone of
+/// points every one of those cameras sees on the source, as thick at the middle as the source's
+/// radius over the tangent of the cone's half-angle (cos100: 1.8 radii), so a vertex's normal no
+/// longer points across it. Such a vertex follows the axis instead (towards the other sheet:
+/// against its normal's side of `a`) up to `axis_max_m`, and the chord's middle is on the source's
+/// plane for a cone about its normal (the double cone is symmetric about the plane). Vertices
+/// whose normal is within [`AXIS_MIN_COS`] of square to the axis (the lens's rim) take the ring
+/// moves below.
+///
 /// Returns the number of vertices moved.
-pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> usize {
+pub fn collapse_thin(
+    mesh: &mut Mesh,
+    occ: &Occupancy,
+    max_thickness_m: f64,
+    axes: &[Option<DVec3>],
+    axis_max_m: f64,
+) -> usize {
     use rayon::prelude::*;
     let normals = vertex_normals(mesh);
     let step = occ.voxel_m * 0.25;
@@ -387,14 +403,22 @@ pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> 
         let q = (p - occ.origin) / occ.voxel_m;
         occ.at(q.x.floor() as i64, q.y.floor() as i64, q.z.floor() as i64)
     };
-    let moves: Vec<Option<DVec3>> = mesh
+    // Each vertex's move and the length of its chord.
+    let found: Vec<Option<(DVec3, f64)>> = mesh
         .vertices
         .par_iter()
         .zip(&normals)
-        .map(|(&v, &n)| {
+        .enumerate()
+        .map(|(i, (&v, &n))| {
             if n == DVec3::ZERO {
                 return None;
             }
+            // The unit direction across the part (towards its other face) and how far to look.
+            let (n, max_thickness_m) = match axes.get(i).copied().flatten() {
+                Some(a) if n.dot(a).abs() >= AXIS_MIN_COS => (a * n.dot(a).signum(), axis_max_m),
+                Some(_) => return None,
+                None => (n, max_thickness_m),
+            };
             let mut inside = false;
             let mut s = step;
             while s <= max_thickness_m + step {
@@ -404,7 +428,7 @@ pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> 
                 } else if inside {
                     // Left the volume: the far face lies between the last two samples.
                     let t = s - 0.5 * step;
-                    return (t <= max_thickness_m).then_some(-n * (0.5 * t));
+                    return (t <= max_thickness_m).then_some((-n * (0.5 * t), t));
                 } else if s > 1.5 * occ.voxel_m {
                     return None;
                 }
@@ -413,13 +437,15 @@ pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> 
             None
         })
         .collect();
+    let mut moves: Vec<Option<DVec3>> = found.iter().map(|f| f.map(|(m, _)| m)).collect();
+    let on_rim_plane = beam_lenses_onto_rim_planes(mesh, axes, &found, &mut moves, occ.voxel_m);
     let moved = moves.iter().filter(|m| m.is_some()).count();
     let mut disp: Vec<DVec3> = moves.iter().map(|m| m.unwrap_or(DVec3::ZERO)).collect();
     let neighbours = neighbours(mesh);
     for _ in 0..2 {
         let old = disp.clone();
         for (i, nb) in neighbours.iter().enumerate() {
-            if moves[i].is_none() || nb.is_empty() {
+            if moves[i].is_none() || nb.is_empty() || on_rim_plane[i] {
                 continue;
             }
             let (sum, k) = nb
@@ -459,6 +485,88 @@ pub fn collapse_thin(mesh: &mut Mesh, occ: &Occupancy, max_thickness_m: f64) -> 
     }
     moved
 }
+
+/// A beam's lens is not symmetric about the source: a camera sees a point in front of the source
+/// spread further over it than a point as far behind (perspective: by h / (D cos θ ∓ h)), so more is
+/// carved in front, and the chords' middles lie behind the source by up to a tenth of the lens's
+/// thickness (cos100 at rigo:300: 8 mm at the middle, a dish). Where the lens is thin, at its rim,
+/// that is negligible, and the rim is where every camera sees the source's outline. So each
+/// connected part with a beam axis whose vertices with a chord of at most [`RIM_CHORD_CELLS`] cells
+/// (their middles) lie on a plane (at least half of them within two cells, those within a cell RMS)
+/// goes onto that plane along the axis, every vertex. Returns which vertices did (their moves in `moves`).
+fn beam_lenses_onto_rim_planes(
+    mesh: &Mesh,
+    axes: &[Option<DVec3>],
+    found: &[Option<(DVec3, f64)>],
+    moves: &mut [Option<DVec3>],
+    voxel_m: f64,
+) -> Vec<bool> {
+    let mut done = vec![false; mesh.vertices.len()];
+    if !axes.iter().any(Option::is_some) {
+        return done;
+    }
+    let component = components(mesh);
+    let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, a) in axes.iter().enumerate() {
+        if a.is_some() {
+            parts.entry(component[i]).or_default().push(i);
+        }
+    }
+    for vs in parts.values() {
+        let Some(axis) = axes[vs[0]] else { continue };
+        let rim: Vec<DVec3> = vs
+            .iter()
+            .filter_map(|&i| {
+                let (m, t) = found[i]?;
+                (t <= RIM_CHORD_CELLS * voxel_m).then(|| mesh.vertices[i] + m)
+            })
+            .collect();
+        if rim.len() < 16 {
+            continue;
+        }
+        // Robustly: from the plane across the axis at the rim's median height, twice the plane of
+        // the rim vertices within two cells of the last one (the caps where the content's box cut
+        // the lens, and stray ends, have short chords too).
+        let mut heights: Vec<f64> = rim.iter().map(|p| p.dot(axis)).collect();
+        heights.sort_by(f64::total_cmp);
+        let mut plane = (axis * heights[heights.len() / 2], axis);
+        let mut inliers = Vec::new();
+        for _ in 0..2 {
+            let (c, n) = plane;
+            inliers = rim
+                .iter()
+                .copied()
+                .filter(|p| (*p - c).dot(n).abs() <= 2.0 * voxel_m)
+                .collect();
+            match (inliers.len() >= 16)
+                .then(|| super::refine::plane_of(&inliers))
+                .flatten()
+            {
+                Some((c, n, _)) => plane = (c, n),
+                None => break,
+            }
+        }
+        let (c, n) = plane;
+        let rms = (inliers.iter().map(|p| (*p - c).dot(n).powi(2)).sum::<f64>() / inliers.len().max(1) as f64).sqrt();
+        let facing = n.dot(axis);
+        if 2 * inliers.len() < rim.len() || rms > voxel_m || facing.abs() < 0.5 {
+            continue;
+        }
+        for &i in vs {
+            moves[i] = Some(axis * ((c - mesh.vertices[i]).dot(n) / facing));
+            done[i] = true;
+        }
+    }
+    done
+}
+
+/// A beam lens's rim: its vertices whose chord along the axis is at most this many cells.
+pub const RIM_CHORD_CELLS: f64 = 4.0;
+
+/// A vertex of a beam's lens follows the beam's axis across it when its normal's cosine with the
+/// axis is at least this (the double cone's faces: 0.48 for cos100, 0.97 for cos10); flatter to
+/// the axis, it is on the lens's rim.
+pub const AXIS_MIN_COS: f64 = 0.2;
 
 /// Passes of [`merge_twin_sheets`] after a collapse.
 const TWIN_PASSES: usize = 2;
@@ -725,6 +833,67 @@ mod tests {
         occ
     }
 
+    /// A beam's lens: a double cone on a disc of 14 cells' radius in z = n/2, its apexes 20 cells
+    /// above and 16 below (a camera spreads a point in front of a source further over it than one
+    /// behind). Along its normals the collapse cannot cross it (the chords are longer than the
+    /// limit); along the beam's axis every vertex goes onto the rim's plane, and the disc keeps
+    /// its radius.
+    #[test]
+    fn a_beams_lopsided_double_cone_goes_onto_the_plane_of_its_rim() {
+        let n = 64;
+        let cell = 1.0 / n as f64;
+        let mut occ = ball(n, 0.0);
+        let c = n as f64 / 2.0;
+        let (r, above, below) = (14.0, 20.0, 16.0);
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let (dx, dy, dz) = (x as f64 + 0.5 - c, y as f64 + 0.5 - c, z as f64 + 0.5 - c);
+                    let rho = dx.hypot(dy);
+                    let height = if dz >= 0.0 { above } else { below };
+                    occ.cells.set((z * n + y) * n + x, rho <= r * (1.0 - dz.abs() / height));
+                }
+            }
+        }
+        let original = surface_nets(&occ);
+        let mut m = original.clone();
+        assert_eq!(
+            collapse_thin(&mut m, &occ, 4.0 * cell, &[], 0.0),
+            0,
+            "too thick along the normals"
+        );
+        let axes = vec![Some(DVec3::Z); m.vertices.len()];
+        let moved = collapse_thin(&mut m, &occ, 4.0 * cell, &axes, 1.0);
+        assert!(moved > m.vertices.len() * 9 / 10, "{moved} of {}", m.vertices.len());
+        let worst = m
+            .vertices
+            .iter()
+            .map(|v| ((v.z - 0.5) / cell).abs())
+            .fold(0.0, f64::max);
+        assert!(worst < 0.6, "farthest vertex {worst:.2} cells off the plane");
+        let radius = m
+            .vertices
+            .iter()
+            .map(|v| (v.x - 0.5).hypot(v.y - 0.5) / cell)
+            .fold(0.0, f64::max);
+        assert!((radius - r).abs() < 1.0, "radius {radius:.2} cells, not {r}");
+        // Without the rim's plane (the chords' middles alone) the middle would sit lower.
+        let mids: Vec<f64> = original
+            .vertices
+            .iter()
+            .filter(|v| (v.x - 0.5).hypot(v.y - 0.5) / cell < 3.0)
+            .map(|v| (v.z - 0.5) / cell)
+            .collect();
+        let (top, bottom) = mids
+            .iter()
+            .fold((f64::MIN, f64::MAX), |(t, b), &z| (t.max(z), b.min(z)));
+        assert!(
+            0.5 * (top + bottom) > 1.0,
+            "chord middle at the axis {:.2} cells",
+            0.5 * (top + bottom)
+        );
+    }
+
     /// A wedge: flat on top, its bottom tilted, 3 to 9 cells thick. Each sheet's own chord
     /// midpoint differs (the bottom's chords run along its tilted normal); after the collapse the
     /// two sheets are one surface: every moved vertex lies within 0.1 cell of the other sheet.
@@ -751,7 +920,7 @@ mod tests {
         let original = surface_nets(&occ);
         let normals = vertex_normals(&original);
         let mut m = original.clone();
-        let moved = collapse_thin(&mut m, &occ, 12.0 * cell);
+        let moved = collapse_thin(&mut m, &occ, 12.0 * cell, &[], 0.0);
         assert!(moved > m.vertices.len() / 2, "{moved} of {}", m.vertices.len());
         let up: Vec<[DVec3; 3]> = m
             .triangles
@@ -787,7 +956,7 @@ mod tests {
         let cell = 1.0 / n as f64;
         let occ = slab(n, 18.0, 6);
         let mut m = surface_nets(&occ);
-        let moved = collapse_thin(&mut m, &occ, 10.0 * cell);
+        let moved = collapse_thin(&mut m, &occ, 10.0 * cell, &[], 0.0);
         assert!(moved > m.vertices.len() / 2, "{moved} of {}", m.vertices.len());
         // The faces' vertices (away from the rim) sit on the mid-plane z = 0.5 within a quarter cell.
         let mut faces = 0;
@@ -807,13 +976,13 @@ mod tests {
         let occ = ball(32, 10.0);
         let mut m = surface_nets(&occ);
         let before = m.vertices.clone();
-        assert_eq!(collapse_thin(&mut m, &occ, 8.0 / 32.0), 0);
+        assert_eq!(collapse_thin(&mut m, &occ, 8.0 / 32.0, &[], 0.0), 0);
         assert_eq!(m.vertices, before);
         // The collapsed slab still passes through the cells the carved one lit up: its cells lie in
         // the slab's middle layers.
         let occ = slab(n, 18.0, 6);
         let mut m = surface_nets(&occ);
-        collapse_thin(&mut m, &occ, 10.0 * cell);
+        collapse_thin(&mut m, &occ, 10.0 * cell, &[], 0.0);
         let cells = cells_of(&m, &occ);
         assert!(cells.count() > 0);
         for (i, c) in cells.cells.iter().enumerate() {

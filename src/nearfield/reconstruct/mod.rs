@@ -181,6 +181,10 @@ pub struct ReconstructReport {
     pub stray_triangles: usize,
     /// Whether the directional rule's carving was kept (the one-sided rule's explained too little).
     pub directional: bool,
+    /// The grazing tolerance (degrees) of the one-sided carving kept: [`ReconstructOptions::grazing_deg`],
+    /// or [`SMALL_FEATURE_GRAZING_DEG`] when that explained more of the light (0 for the directional
+    /// rule).
+    pub grazing_deg: f64,
     /// The flat parts moved onto the plane their cameras agree on ([`refine`]), one entry each.
     pub flat_parts: Vec<refine::PlaneFit>,
     /// What [`simplify`] did (triangles before, vertices collapsed).
@@ -229,6 +233,17 @@ pub const CAPTURE_SUPERSAMPLE: u32 = 3;
 /// Whether a reconstructed proxy is stored as a bound (the renderer samples the images plainly and
 /// dark cameras vote) rather than a surface (only cameras that see light vote where any does).
 pub const PROXY_IS_BOUND: bool = false;
+
+/// When the one-sided carving explains less than [`MIN_COVERAGE`] of the light, the scan is carved
+/// again with dark cameras within this angle (degrees) of a surface's plane not counted, and the
+/// carving that explains more is kept. Small features seen edge-on are missed by a camera that
+/// samples points instead of integrating its pixels: a 3 mm dot seen at elevation e covers
+/// 3 mm · sin e across, thinner than the 0.32 mm between the rays of a 3 × 3-sampled 0.95 mm pixel
+/// below 6° (`led-dots`), a 1 mm strip thinner than 0.51 mm below 31° (`strips`), so those cameras
+/// carved them away. The lens this leaves in front of a source is as thick as the source is wide
+/// times tan 30°: a small feature's is thin enough for the thin-part collapse, a wide source's
+/// would not be, and a wide source is explained at 1°.
+pub const SMALL_FEATURE_GRAZING_DEG: f64 = 30.0;
 
 /// Largest thickness, as a fraction of the content's diameter, collapsed after directional carving
 /// (which keeps the space in front of and behind a flat source: the whole content ball across).
@@ -336,18 +351,39 @@ pub fn reconstruct(
         ));
     }
     let centre = set.sphere.centre_m;
+    // The side the light comes out of: the mean direction towards the cameras that see it (zero
+    // when it comes out of every side alike).
+    let lit_axis = chosen
+        .iter()
+        .zip(&masks)
+        .filter(|(_, m)| {
+            m.as_ref()
+                .is_some_and(|m| m.max_cd_m2 >= opts.camera_relative * brightest)
+        })
+        .map(|(&i, _)| set.cameras[i].direction_from(centre))
+        .sum::<DVec3>()
+        .normalize_or_zero();
     let mut views = Vec::new();
+    // Cameras on the lit side that see no light: the scan holds a beam.
+    let mut outside_beam = 0usize;
     let mut content: f64 = 0.0;
     let mut footprint = f64::INFINITY;
     for (&i, m) in chosen.iter().zip(masks) {
         let Some(mut m) = m else { continue };
+        let cam = &set.cameras[i];
         if m.max_cd_m2 < opts.camera_relative * brightest {
+            if cam.direction_from(centre).dot(lit_axis) > 0.0 {
+                outside_beam += 1;
+                // On the lit side, yet no light: outside a beam. Its darkness says nothing about
+                // where the source is (counted as dark, the cameras beyond 75° of cos10's axis,
+                // which see its front, carved it away).
+                continue;
+            }
             // Sees the back of the source or nothing: all dark (the one-sided test takes that as
             // the back of an emitter, not as empty space).
             let (w, h) = m.size();
             m = LitMask::unlit(w, h);
         }
-        let cam = &set.cameras[i];
         let k = *set.intrinsics_of(i);
         let d = (cam.position_m - centre).length();
         if let Some([c0, c1, r0, r1]) = m.lit_box() {
@@ -387,10 +423,27 @@ pub fn reconstruct(
         });
         let carve_s = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let attempt = Attempt::mesh(&views, occupancy, rule, thin_fraction * 2.0 * content);
+        // A beam's lens is collapsed along its axis only when some camera saw the beam from
+        // outside (a part that only steep cameras see lit, such as a lens's floating bottom
+        // under a sparsely scanned disc, is no beam).
+        let beam_thin_m = if outside_beam > 0 { 2.0 * content } else { 0.0 };
+        let attempt = Attempt::mesh(&views, occupancy, rule, thin_fraction * 2.0 * content, beam_thin_m);
         (attempt, carve_s, t.elapsed().as_secs_f64())
     };
     let (mut best, mut carve_s, mut mesh_s) = run(carve::Rule::OneSided { grazing }, opts.thin_fraction, "carving");
+    if best.coverage < MIN_COVERAGE && opts.grazing_deg < SMALL_FEATURE_GRAZING_DEG {
+        let (other, c, m) = run(
+            carve::Rule::OneSided {
+                grazing: SMALL_FEATURE_GRAZING_DEG.to_radians().sin(),
+            },
+            opts.thin_fraction,
+            "carving (small features)",
+        );
+        (carve_s, mesh_s) = (carve_s + c, mesh_s + m);
+        if other.coverage > best.coverage {
+            best = other;
+        }
+    }
     if opts.directional_fallback && best.coverage < MIN_COVERAGE {
         let (other, c, m) = run(
             carve::Rule::Directional,
@@ -490,6 +543,10 @@ pub fn reconstruct(
         collapsed_coverage,
         stray_triangles,
         directional: rule == carve::Rule::Directional,
+        grazing_deg: match rule {
+            carve::Rule::OneSided { grazing } => grazing.asin().to_degrees(),
+            carve::Rule::Directional => 0.0,
+        },
         flat_parts,
         simplified,
         seconds: [
@@ -560,15 +617,21 @@ struct Attempt {
 }
 
 impl Attempt {
-    /// Meshes `occupancy`, collapses its parts thinner than `max_thin_m` unless that hides light,
-    /// and measures the coverage.
-    fn mesh(views: &[View], occupancy: Occupancy, rule: carve::Rule, max_thin_m: f64) -> Self {
+    /// Meshes `occupancy`, collapses its parts thinner than `max_thin_m` (a beam's lens, along
+    /// its axis, up to `beam_thin_m`; 0: no beams) unless that hides light, and measures the
+    /// coverage.
+    fn mesh(views: &[View], occupancy: Occupancy, rule: carve::Rule, max_thin_m: f64, beam_thin_m: f64) -> Self {
         let mut mesh = mesh::surface_nets(&occupancy);
         let carved = coverage(views, &occupancy);
         let (mut collapsed_vertices, mut collapsed_coverage) = (0, carved);
         if max_thin_m > 0.0 && !mesh.triangles.is_empty() {
             let mut thin = mesh.clone();
-            let moved = mesh::collapse_thin(&mut thin, &occupancy, max_thin_m);
+            let axes = if beam_thin_m > 0.0 {
+                beam_axes(&mesh, views)
+            } else {
+                Vec::new()
+            };
+            let moved = mesh::collapse_thin(&mut thin, &occupancy, max_thin_m, &axes, beam_thin_m);
             if moved > 0 {
                 let c = coverage(views, &mesh::cells_of(&thin, &occupancy));
                 // The collapse must not hide light the carved volume explained (a thin tube
@@ -605,6 +668,54 @@ impl Attempt {
             stray_triangles,
         }
     }
+}
+
+/// Half-angle (degrees) of the cone about its mean within which every camera that sees a part of
+/// the carved surface lit lies, below which the part is a beam's lens ([`beam_axes`]). A source
+/// seen from every direction of its half-space leaves a lens a few cells thick (the cameras 1°
+/// above its plane carve it); cos10 is seen within 75.5° of its axis (beyond, under 10⁻⁶ of its
+/// peak), cos100 within 29°.
+pub const BEAM_CONE_DEG: f64 = 80.0;
+
+/// Vertices of each connected part sampled by [`beam_axes`].
+const BEAM_SAMPLES: usize = 64;
+
+/// Per vertex of `mesh` (the carved surface): the axis of the beam its connected part emits, or
+/// `None`. From up to [`BEAM_SAMPLES`] vertices of the part, the directions towards the views that
+/// see light at them; their mean is the axis when all but 1 % of them lie within
+/// [`BEAM_CONE_DEG`] of it.
+fn beam_axes(mesh: &Mesh, views: &[View]) -> Vec<Option<DVec3>> {
+    let component = mesh::components(mesh);
+    let mut members: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, &c) in component.iter().enumerate() {
+        members.entry(c).or_default().push(i);
+    }
+    let cone_cos = BEAM_CONE_DEG.to_radians().cos();
+    let axis_of: std::collections::BTreeMap<u32, DVec3> = members
+        .par_iter()
+        .filter_map(|(&c, vs)| {
+            let step = vs.len().div_ceil(BEAM_SAMPLES).max(1);
+            let mut dirs = Vec::new();
+            for &i in vs.iter().step_by(step) {
+                let p = mesh.vertices[i];
+                for v in views {
+                    let Some(px) = v.intrinsics.project(v.camera.to_camera(p - v.camera.position_m)) else {
+                        continue;
+                    };
+                    if v.mask.dark(px.x, px.y, 0.5) == Some(false) {
+                        dirs.push((v.camera.position_m - p).normalize_or_zero());
+                    }
+                }
+            }
+            let axis = dirs.iter().copied().sum::<DVec3>().normalize_or_zero();
+            if dirs.len() < 16 || axis == DVec3::ZERO {
+                return None;
+            }
+            let outside = dirs.iter().filter(|d| d.dot(axis) < cone_cos).count();
+            (outside * 100 <= dirs.len()).then_some((c, axis))
+        })
+        .collect();
+    component.iter().map(|c| axis_of.get(c).copied()).collect()
 }
 
 /// Fraction of the lit pixels of up to 64 views (the first in `views`' order; up to 2000 pixels

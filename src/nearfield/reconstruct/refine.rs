@@ -39,8 +39,10 @@
 //!   own light, which is no evidence about the plane.
 //! - Distances are in units of the larger of the carving's cell and the capture pixel's footprint
 //!   at the centre (`unit_m`).
-//! - A part whose cameras are too few (fewer than 3 seeing it lit) or whose cost does not fall by
-//!   [`MIN_GAIN`] from the fitted plane keeps the fitted plane (still flattened).
+//! - A part whose cameras are too few (fewer than 3 seeing it lit), whose cost does not fall by
+//!   [`MIN_GAIN`] from the fitted plane, or whose least cost is at the end of the search range and
+//!   lower by less than [`EDGE_MIN_GAIN`] (no minimum: a uniform beam seen within 25°) keeps the
+//!   fitted plane (still flattened).
 
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
@@ -67,6 +69,10 @@ pub const MIN_ELEVATION_DEG: f64 = 10.0;
 pub const MAX_POINTS: usize = 2000;
 /// The offset found is used when it lowers the disagreement by at least this fraction.
 pub const MIN_GAIN: f64 = 0.02;
+
+/// A plane whose least disagreement lies at the end of the search range moves there only when
+/// that lowers the disagreement by at least this fraction.
+pub const EDGE_MIN_GAIN: f64 = 0.25;
 
 /// An outline is snapped only where the light 3 units outside it is below this fraction of the
 /// light inside (an edge against darkness).
@@ -511,7 +517,7 @@ fn step_edge(ts: &[f64], per: &[Vec<Option<f64>>]) -> Option<f64> {
 
 /// Centroid, unit normal (smallest principal axis) and the standard deviation along the largest
 /// axis of `pts`; `None` for a degenerate set.
-fn plane_of(pts: &[DVec3]) -> Option<(DVec3, DVec3, f64)> {
+pub(crate) fn plane_of(pts: &[DVec3]) -> Option<(DVec3, DVec3, f64)> {
     let n = pts.len() as f64;
     let c = pts.iter().sum::<DVec3>() / n;
     let mut cov = DMat3::ZERO;
@@ -689,7 +695,8 @@ fn disagreement(pts: &[DVec3], normal: DVec3, dz: f64, shots: &[&Shot], vis: &[V
 }
 
 /// The offset (m) in ±[`SEARCH_CELLS`] cells with the least disagreement, and the disagreement at 0
-/// and there; 0 when the cameras do not decide (see the module's promises).
+/// and there; 0 when the cameras do not decide (see the module's promises) or the least is at the
+/// end of the range and lower by less than [`EDGE_MIN_GAIN`].
 fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot], vis: &[Vec<bool>]) -> (f64, [f64; 2]) {
     let Some(at_zero) = disagreement(pts, normal, 0.0, shots, vis) else {
         return (0.0, [0.0, 0.0]);
@@ -704,6 +711,13 @@ fn best_offset(pts: &[DVec3], normal: DVec3, voxel_m: f64, shots: &[&Shot], vis:
                 best = (dz, c);
             }
         }
+    }
+    if best.0.abs() >= (n as f64 - 0.5) * coarse && best.1 > (1.0 - EDGE_MIN_GAIN) * at_zero {
+        // The least disagreement at the end of the range is no minimum: it only falls that way,
+        // and by little (cos100, uniform and seen only within 25° of its axis: 2.4 % less 2 units
+        // out, where the outline its carving gave was within 0.1 mm). Falling by much, it points
+        // to the surface beyond (a floating lens bottom under a sparsely scanned disc: 99 %).
+        return (0.0, [at_zero, at_zero]);
     }
     let fine = 0.005 * voxel_m;
     let centre = best.0;

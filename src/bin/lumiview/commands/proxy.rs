@@ -156,6 +156,7 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "collapsed_coverage": r.collapsed_coverage,
         "stray_triangles": r.stray_triangles,
         "directional": r.directional,
+        "grazing_deg": r.grazing_deg,
         "flat_parts": r.flat_parts.iter().map(|f| json!({
             "vertices": f.vertices,
             "absorbed": f.absorbed,
@@ -439,12 +440,12 @@ fn synth_table(args: &ProxyArgs, names: &str) -> CliResult {
     print_report(&out)
 }
 
-/// The carving rule the kept mesh came from.
-fn rule_name(r: &lumiview::nearfield::reconstruct::ReconstructReport) -> &'static str {
+/// The carving rule the kept mesh came from (the one-sided rule with its grazing tolerance).
+fn rule_name(r: &lumiview::nearfield::reconstruct::ReconstructReport) -> String {
     if r.directional {
-        "dir"
+        "dir".into()
     } else {
-        "1-sided"
+        format!("1s {:.0}°", r.grazing_deg)
     }
 }
 
