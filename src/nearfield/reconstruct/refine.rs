@@ -164,106 +164,126 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
     for (v, c) in comp.iter().enumerate() {
         parts.entry(*c).or_default().push(v);
     }
-    // Vertices used by triangles only (an unused vertex is its own part).
     let mut fits = Vec::new();
+    // Parts not flat on their own (too small to span a plane: a 3 mm dot is 3 units across), tried
+    // again together: coplanar small features (led-dots' 32 dots) share one plane.
+    let mut rest: Vec<u32> = Vec::new();
     for (&id, part) in &parts {
-        if part.len() < 16 {
-            continue;
+        match fit_part(mesh, &comp, &[id], part, voxel_m, shots) {
+            Some(fit) => fits.push(fit),
+            // Vertices used by triangles only (an unused vertex is its own part).
+            None if part.len() >= 4 => rest.push(id),
+            None => {}
         }
-        let idx = part;
-        // Robust fit: the plane of all vertices, then of those within FLAT_MAX_CELLS of it (a
-        // part may carry an unflattened blob or rim, which stays as it is).
-        let all: Vec<DVec3> = idx.iter().map(|&i| mesh.vertices[i]).collect();
-        let Some((c0, n0, _)) = plane_of(&all) else { continue };
-        let near = |c: DVec3, n: DVec3| -> Vec<usize> {
-            (0..all.len())
-                .filter(|&k| (all[k] - c).dot(n).abs() <= FLAT_MAX_CELLS * voxel_m)
-                .collect()
-        };
-        let first = near(c0, n0);
-        let Some((c1, n1, _)) = plane_of(&first.iter().map(|&k| all[k]).collect::<Vec<_>>()) else {
-            continue;
-        };
-        let inliers = near(c1, n1);
-        if (inliers.len() as f64) < MIN_INLIERS * all.len() as f64 {
-            continue;
-        }
-        let idx: Vec<usize> = inliers.iter().map(|&k| idx[k]).collect();
-        let pts: Vec<DVec3> = inliers.iter().map(|&k| all[k]).collect();
-        let Some((centre, normal, spread)) = plane_of(&pts) else {
-            continue;
-        };
-        let dist: Vec<f64> = pts.iter().map(|p| (*p - centre).dot(normal)).collect();
-        let rms = (dist.iter().map(|d| d * d).sum::<f64>() / dist.len() as f64).sqrt();
-        if rms > FLAT_RMS_CELLS * voxel_m || spread < MIN_SPAN_CELLS * voxel_m {
-            continue;
-        }
-        let step = (pts.len() / MAX_POINTS).max(1);
-        let on_plane: Vec<DVec3> = pts
-            .iter()
-            .zip(&dist)
-            .step_by(step)
-            .map(|(p, d)| *p - *d * normal)
-            .collect();
-        let seeing: Vec<&Shot> = shots
-            .iter()
-            .filter(|s| {
-                let to = s.camera.position_m - centre;
-                (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
-            })
-            .collect();
-        // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
-        // back plane): those cameras see other light there and do not vote.
-        let sight = Sight::without(mesh, &comp, id, voxel_m);
-        let vis = sight.rows(&on_plane, &seeing);
-        let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing, &vis);
-        for (&i, d) in idx.iter().zip(&dist) {
-            mesh.vertices[i] -= (*d - offset_m) * normal;
-        }
-        // The part's other vertices (a lens carving could not take off the middle of a wide
-        // source) go onto the plane too where the cameras agree better there than where they are.
-        let mut absorbed = 0;
-        let plane_pts: Vec<DVec3> = on_plane.iter().map(|p| *p + offset_m * normal).collect();
-        if let Some((means, lit)) = camera_means(&plane_pts, &seeing, &vis) {
-            let is_inlier: std::collections::HashSet<usize> = idx.iter().copied().collect();
-            let outliers: Vec<usize> = part.iter().copied().filter(|i| !is_inlier.contains(i)).collect();
-            let onto: Vec<Option<DVec3>> = outliers
-                .par_iter()
-                .map(|&i| {
-                    let v = mesh.vertices[i];
-                    let flat = v - ((v - centre).dot(normal) - offset_m) * normal;
-                    let there = point_disagreement(flat, &seeing, &means, &lit, &sight.row(flat, &seeing))?;
-                    match point_disagreement(v, &seeing, &means, &lit, &sight.row(v, &seeing)) {
-                        Some(here) if here < there => None,
-                        _ => Some(flat),
-                    }
-                })
-                .collect();
-            for (&i, p) in outliers.iter().zip(onto) {
-                if let Some(p) = p {
-                    mesh.vertices[i] = p;
-                    absorbed += 1;
-                }
-            }
-            let on: std::collections::HashSet<usize> = part
-                .iter()
-                .copied()
-                .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
-                .collect();
-            snap_outline(mesh, &on, (centre, normal), voxel_m, (&seeing, &sight), &means, &lit);
-        }
-        fits.push(PlaneFit {
-            absorbed,
-            vertices: idx.len(),
-            rms_m: rms,
-            offset_m,
-            cost,
-            cameras: seeing.len(),
-            point_m: centre + offset_m * normal,
-            normal,
-        });
+    }
+    if rest.len() >= 2 {
+        let together: Vec<usize> = rest.iter().flat_map(|id| parts[id].iter().copied()).collect();
+        fits.extend(fit_part(mesh, &comp, &rest, &together, voxel_m, shots));
     }
     fits
+}
+
+/// [`refine_flat_parts`] for one part: the vertices `part` of the connected components `ids`
+/// (`comp` gives each vertex's component); `None` when it is not flat.
+fn fit_part(
+    mesh: &mut Mesh,
+    comp: &[u32],
+    ids: &[u32],
+    part: &[usize],
+    voxel_m: f64,
+    shots: &[Shot],
+) -> Option<PlaneFit> {
+    if part.len() < 16 {
+        return None;
+    }
+    let idx = part;
+    // Robust fit: the plane of all vertices, then of those within FLAT_MAX_CELLS of it (a
+    // part may carry an unflattened blob or rim, which stays as it is).
+    let all: Vec<DVec3> = idx.iter().map(|&i| mesh.vertices[i]).collect();
+    let (c0, n0, _) = plane_of(&all)?;
+    let near = |c: DVec3, n: DVec3| -> Vec<usize> {
+        (0..all.len())
+            .filter(|&k| (all[k] - c).dot(n).abs() <= FLAT_MAX_CELLS * voxel_m)
+            .collect()
+    };
+    let first = near(c0, n0);
+    let (c1, n1, _) = plane_of(&first.iter().map(|&k| all[k]).collect::<Vec<_>>())?;
+    let inliers = near(c1, n1);
+    if (inliers.len() as f64) < MIN_INLIERS * all.len() as f64 {
+        return None;
+    }
+    let idx: Vec<usize> = inliers.iter().map(|&k| idx[k]).collect();
+    let pts: Vec<DVec3> = inliers.iter().map(|&k| all[k]).collect();
+    let (centre, normal, spread) = plane_of(&pts)?;
+    let dist: Vec<f64> = pts.iter().map(|p| (*p - centre).dot(normal)).collect();
+    let rms = (dist.iter().map(|d| d * d).sum::<f64>() / dist.len() as f64).sqrt();
+    if rms > FLAT_RMS_CELLS * voxel_m || spread < MIN_SPAN_CELLS * voxel_m {
+        return None;
+    }
+    let step = (pts.len() / MAX_POINTS).max(1);
+    let on_plane: Vec<DVec3> = pts
+        .iter()
+        .zip(&dist)
+        .step_by(step)
+        .map(|(p, d)| *p - *d * normal)
+        .collect();
+    let seeing: Vec<&Shot> = shots
+        .iter()
+        .filter(|s| {
+            let to = s.camera.position_m - centre;
+            (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
+        })
+        .collect();
+    // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
+    // back plane): those cameras see other light there and do not vote.
+    let sight = Sight::without(mesh, comp, ids, voxel_m);
+    let vis = sight.rows(&on_plane, &seeing);
+    let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing, &vis);
+    for (&i, d) in idx.iter().zip(&dist) {
+        mesh.vertices[i] -= (*d - offset_m) * normal;
+    }
+    // The part's other vertices (a lens carving could not take off the middle of a wide
+    // source) go onto the plane too where the cameras agree better there than where they are.
+    let mut absorbed = 0;
+    let plane_pts: Vec<DVec3> = on_plane.iter().map(|p| *p + offset_m * normal).collect();
+    if let Some((means, lit)) = camera_means(&plane_pts, &seeing, &vis) {
+        let is_inlier: std::collections::HashSet<usize> = idx.iter().copied().collect();
+        let outliers: Vec<usize> = part.iter().copied().filter(|i| !is_inlier.contains(i)).collect();
+        let onto: Vec<Option<DVec3>> = outliers
+            .par_iter()
+            .map(|&i| {
+                let v = mesh.vertices[i];
+                let flat = v - ((v - centre).dot(normal) - offset_m) * normal;
+                let there = point_disagreement(flat, &seeing, &means, &lit, &sight.row(flat, &seeing))?;
+                match point_disagreement(v, &seeing, &means, &lit, &sight.row(v, &seeing)) {
+                    Some(here) if here < there => None,
+                    _ => Some(flat),
+                }
+            })
+            .collect();
+        for (&i, p) in outliers.iter().zip(onto) {
+            if let Some(p) = p {
+                mesh.vertices[i] = p;
+                absorbed += 1;
+            }
+        }
+        let on: std::collections::HashSet<usize> = part
+            .iter()
+            .copied()
+            .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
+            .collect();
+        snap_outline(mesh, &on, (centre, normal), voxel_m, (&seeing, &sight), &means, &lit);
+    }
+    Some(PlaneFit {
+        absorbed,
+        vertices: idx.len(),
+        rms_m: rms,
+        offset_m,
+        cost,
+        cameras: seeing.len(),
+        point_m: centre + offset_m * normal,
+        normal,
+    })
 }
 
 /// Moves the outline of a flattened part (the vertices `on` its plane, given as `(centre,
@@ -589,12 +609,13 @@ struct Sight {
 }
 
 impl Sight {
-    /// The occluders of part `id` (`comp` gives each vertex's part): every other part's triangles.
-    fn without(mesh: &Mesh, comp: &[u32], id: u32, voxel_m: f64) -> Self {
+    /// The occluders of the parts `ids` (`comp` gives each vertex's part): every other part's
+    /// triangles.
+    fn without(mesh: &Mesh, comp: &[u32], ids: &[u32], voxel_m: f64) -> Self {
         let soup: Vec<[f32; 3]> = mesh
             .triangles
             .iter()
-            .filter(|t| comp[t[0] as usize] != id)
+            .filter(|t| !ids.contains(&comp[t[0] as usize]))
             .flat_map(|t| mesh.corners(t).map(|v| v.as_vec3().to_array()))
             .collect();
         Self {
@@ -826,13 +847,13 @@ mod tests {
         };
         let below = shot(DVec3::new(0.0, 0.0, -1.0));
         let aside = shot(DVec3::new(1.0, 0.0, -0.3));
-        let back = Sight::without(&mesh, &comp, comp[4], 0.001);
+        let back = Sight::without(&mesh, &comp, &[comp[4]], 0.001);
         let p = DVec3::new(0.0, 0.0, 0.05);
         assert!(!back.clear(p, &below), "the front square hides the back one's middle");
         assert!(back.clear(p, &aside));
         assert!(back.clear(DVec3::new(0.08, 0.0, 0.05), &below));
         // The front square is in front of everything: no camera is hidden from it by the back.
-        let front = Sight::without(&mesh, &comp, comp[0], 0.001);
+        let front = Sight::without(&mesh, &comp, &[comp[0]], 0.001);
         assert!(front.clear(DVec3::ZERO, &below) && front.clear(DVec3::ZERO, &aside));
     }
 }
