@@ -4,11 +4,10 @@
 //! **Status (issue 17, in progress):** `lumiview pack` (manifests, `--synth`) and the loaders of
 //! `render` and `lumi_luminaire_load` (manifests) store it as the pack's proxy through
 //! [`scan_proxy`]; `lumiview proxy` writes it as glTF and measures it (docs/proxy.md). Measured on
-//! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 0.02–0.2 mm
-//! (0.016–0.07 % of the bounding diameter) for `disc`, `rect`, `star-panel`, `two-planes` and
-//! `cos1`; nothing survives for `strips`, `led-dots`, `cos10`, `cos100`, `reflector` and `peak` (small
-//! features seen edge-on, beams narrower than the camera spacing, a mirror): those scans render
-//! without a proxy, with a warning.
+//! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 within the limit
+//! for 9 of the 11 luminaires (flat sources, beams, small features); nothing useful survives for
+//! `reflector` (a mirror) and `peak` (a 10⁶ cd/m² spot on a 1 cd/m² background, beyond the masks'
+//! 10⁴ range): those scans render without a proxy, with a warning.
 //!
 //! 1. **Cameras**: up to [`ReconstructOptions::max_cameras`], spread evenly over the directions of
 //!    the scan's cameras (the one nearest each point of a Fibonacci sphere).
@@ -16,19 +15,23 @@
 //!    [`ReconstructOptions::lit_relative`] of its own maximum), kept as runs per row plus a coarse
 //!    distance map. Cameras whose brightest pixel is below [`ReconstructOptions::camera_relative`]
 //!    of the brightest camera's see the back of the source or nothing: every pixel of theirs counts
-//!    as dark.
+//!    as dark, unless they lie on the lit side (within 90° of the mean direction of the cameras
+//!    that see light): they are outside a beam and are not used.
 //! 3. **Carving** ([`carve`]): the content ball (where any camera saw light) in a cube, split as an
 //!    octree down to cells of about one capture pixel's footprint (at most
 //!    [`ReconstructOptions::max_cells`] per axis). A coarse cell is empty when a camera that sees all
 //!    of it sees only darkness there and none sees light in it; a finest cell survives when no camera
 //!    sees it dark, or when the cameras that see it lit and those that see it dark fit one emitter
 //!    facing a half-space (the dark ones see its back; dark cameras within
-//!    [`ReconstructOptions::grazing_deg`] of its plane are not counted).
+//!    [`ReconstructOptions::grazing_deg`] of its plane are not counted; when that explains less
+//!    than [`MIN_COVERAGE`] of the light, again within [`SMALL_FEATURE_GRAZING_DEG`]: small features
+//!    that point-sampled cameras missed edge-on).
 //! 4. **Mesh** ([`mesh`]): naive surface nets over the surviving cells, Taubin-smoothed within each
-//!    cell.
-//! 5. **Flat parts** ([`refine`]): each part that is flat within a cell is put on the plane its
-//!    cameras' images agree on (luminance consistency), with the vertices of a lens in front of it
-//!    that the cameras see better on the plane.
+//!    cell; thin parts collapsed onto their middle, a beam's lens along its axis onto the plane
+//!    of its rim ([`mesh::collapse_thin`]).
+//! 5. **Flat parts** ([`refine`]): each part that is flat within a cell (and the parts too small to
+//!    be, together) is put on the plane its cameras' images agree on (luminance consistency), with
+//!    the vertices of a lens in front of it that the cameras see better on the plane.
 //! 6. **Lean flat parts** ([`simplify`]): only the triangles each flat part's outline needs.
 //! 7. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
 //!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
@@ -74,7 +77,9 @@ pub struct ReconstructOptions {
     /// default 1e-6.
     pub camera_relative: f32,
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it (a camera that
-    /// samples points can miss a surface seen that obliquely); default 1.
+    /// samples points can miss a surface seen that obliquely); default 1. Below
+    /// [`SMALL_FEATURE_GRAZING_DEG`], a carving that explains too little of the light is tried
+    /// again with that.
     pub grazing_deg: f64,
     /// Thin parts of the carved volume (a flat emitter's lens) are collapsed onto their middle when
     /// thinner than this fraction of the content's diameter ([`mesh::collapse_thin`]); 0 keeps the
@@ -671,7 +676,7 @@ impl Attempt {
 }
 
 /// Half-angle (degrees) of the cone about its mean within which every camera that sees a part of
-/// the carved surface lit lies, below which the part is a beam's lens ([`beam_axes`]). A source
+/// the carved surface lit lies, below which the part is a beam's lens (`beam_axes`). A source
 /// seen from every direction of its half-space leaves a lens a few cells thick (the cameras 1°
 /// above its plane carve it); cos10 is seen within 75.5° of its axis (beyond, under 10⁻⁶ of its
 /// peak), cos100 within 29°.
