@@ -838,6 +838,22 @@ mod tests {
         }
     }
 
+    /// The cells of an `n`³ grid over the unit cube whose centres, in cells from the grid's centre,
+    /// satisfy `inside`.
+    fn shape(n: usize, inside: impl Fn(DVec3) -> bool) -> Occupancy {
+        let mut occ = ball(n, 0.0);
+        let c = n as f64 / 2.0;
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let d = DVec3::new(x as f64, y as f64, z as f64) + 0.5 - c;
+                    occ.cells.set((z * n + y) * n + x, inside(d));
+                }
+            }
+        }
+        occ
+    }
+
     /// A lens-like slab: a disc of radius `r_cells`, `thick` cells thick about z = n/2.
     fn slab(n: usize, r_cells: f64, thick: usize) -> Occupancy {
         let mut occ = ball(n, 0.0);
@@ -862,19 +878,11 @@ mod tests {
     fn a_beams_lopsided_double_cone_goes_onto_the_plane_of_its_rim() {
         let n = 64;
         let cell = 1.0 / n as f64;
-        let mut occ = ball(n, 0.0);
-        let c = n as f64 / 2.0;
         let (r, above, below) = (14.0, 20.0, 16.0);
-        for z in 0..n {
-            for y in 0..n {
-                for x in 0..n {
-                    let (dx, dy, dz) = (x as f64 + 0.5 - c, y as f64 + 0.5 - c, z as f64 + 0.5 - c);
-                    let rho = dx.hypot(dy);
-                    let height = if dz >= 0.0 { above } else { below };
-                    occ.cells.set((z * n + y) * n + x, rho <= r * (1.0 - dz.abs() / height));
-                }
-            }
-        }
+        let occ = shape(n, |d| {
+            let height = if d.z >= 0.0 { above } else { below };
+            d.x.hypot(d.y) <= r * (1.0 - d.z.abs() / height)
+        });
         let original = surface_nets(&occ);
         let mut m = original.clone();
         assert_eq!(
@@ -921,22 +929,11 @@ mod tests {
     fn a_lopsided_lens_collapses_onto_one_surface() {
         let n = 48;
         let cell = 1.0 / n as f64;
-        let mut occ = ball(n, 0.0);
-        let c = n as f64 / 2.0;
-        for z in 0..n {
-            for y in 0..n {
-                for x in 0..n {
-                    let (dx, dy) = (x as f64 + 0.5 - c, y as f64 + 0.5 - c);
-                    let top = c + 1.5;
-                    let bottom = top - (3.0 + 6.0 * (dx + 18.0) / 36.0);
-                    let zc = z as f64 + 0.5;
-                    occ.cells.set(
-                        (z * n + y) * n + x,
-                        dx.abs() <= 18.0 && dy.abs() <= 18.0 && zc <= top && zc >= bottom,
-                    );
-                }
-            }
-        }
+        let occ = shape(n, |d| {
+            let top = 1.5;
+            let bottom = top - (3.0 + 6.0 * (d.x + 18.0) / 36.0);
+            d.x.abs() <= 18.0 && d.y.abs() <= 18.0 && d.z <= top && d.z >= bottom
+        });
         let original = surface_nets(&occ);
         let normals = vertex_normals(&original);
         let mut m = original.clone();
