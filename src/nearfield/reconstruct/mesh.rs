@@ -383,10 +383,10 @@ pub fn point_triangle_distance(p: DVec3, t: &[DVec3; 3]) -> f64 {
 /// points every one of those cameras sees on the source, as thick at the middle as the source's
 /// radius over the tangent of the cone's half-angle (cos100: 1.8 radii), so a vertex's normal no
 /// longer points across it. Such a vertex follows the axis instead (towards the other sheet:
-/// against its normal's side of `a`) up to `axis_max_m`, and the chord's middle is on the source's
-/// plane for a cone about its normal (the double cone is symmetric about the plane). Vertices
-/// whose normal is within [`AXIS_MIN_COS`] of square to the axis (the lens's rim) take the ring
-/// moves below.
+/// against its normal's side of `a`) up to `axis_max_m`; the chord's middle would be on the
+/// source's plane if the double cone were symmetric about it, which perspective spoils, so the
+/// part then goes onto the plane of its rim (`beam_lenses_onto_rim_planes`). Vertices whose normal
+/// is within [`AXIS_MIN_COS`] of square to the axis (the lens's rim) take the ring moves below.
 ///
 /// Returns the number of vertices moved.
 pub fn collapse_thin(

@@ -11,8 +11,9 @@
 //!   and the covariance's smallest eigenvector), then fitted again to the vertices within
 //!   [`FLAT_MAX_CELLS`] cells of it, twice. A part is flat when at least [`MIN_INLIERS`] of its
 //!   vertices are such inliers, they lie within [`FLAT_RMS_CELLS`] cells RMS of their plane and
-//!   span at least [`MIN_SPAN_CELLS`] cells; only its inliers are moved. Other parts are left as
-//!   they are.
+//!   span at least [`MIN_SPAN_CELLS`] cells; only its inliers are moved. The parts that are not
+//!   flat on their own are then tried once more together, as one part (coplanar small features:
+//!   led-dots' 3 mm dots are 3 units across); what is still not flat is left as it is.
 //! - For a flat part, the plane is moved along its normal by the offset in ±[`SEARCH_CELLS`] cells
 //!   that minimises the luminance disagreement of the cameras that see it at least
 //!   [`MIN_ELEVATION_DEG`] above its plane: points of the part (its vertices on the plane, up to
