@@ -525,15 +525,11 @@ fn beam_lenses_onto_rim_planes(
     if !axes.iter().any(Option::is_some) {
         return done;
     }
-    let component = components(mesh);
-    let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
-    for (i, a) in axes.iter().enumerate() {
-        if a.is_some() {
-            parts.entry(component[i]).or_default().push(i);
-        }
-    }
-    for vs in parts.values() {
-        let Some(axis) = axes[vs[0]] else { continue };
+    // A part's vertices share its axis (or have none).
+    for vs in members(&components(mesh)).values() {
+        let Some(axis) = axes.get(vs[0]).copied().flatten() else {
+            continue;
+        };
         let rim: Vec<DVec3> = vs
             .iter()
             .filter_map(|&i| {
@@ -747,6 +743,16 @@ pub fn components(mesh: &Mesh) -> Vec<u32> {
         }
     }
     (0..n as u32).map(|v| root(&mut parent, v)).collect()
+}
+
+/// The vertices of each connected component, keyed by the component's id in `component` (as
+/// [`components`] gives it), in index order.
+pub fn members(component: &[u32]) -> std::collections::BTreeMap<u32, Vec<usize>> {
+    let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
+    for (i, &c) in component.iter().enumerate() {
+        parts.entry(c).or_default().push(i);
+    }
+    parts
 }
 
 /// `mesh` without its connected components (sharing vertices) of fewer than `min_fraction` of its

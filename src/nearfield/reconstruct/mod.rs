@@ -691,10 +691,7 @@ const BEAM_SAMPLES: usize = 64;
 /// [`BEAM_CONE_DEG`] of it.
 fn beam_axes(mesh: &Mesh, views: &[View]) -> Vec<Option<DVec3>> {
     let component = mesh::components(mesh);
-    let mut members: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
-    for (i, &c) in component.iter().enumerate() {
-        members.entry(c).or_default().push(i);
-    }
+    let members = mesh::members(&component);
     let cone_cos = BEAM_CONE_DEG.to_radians().cos();
     let axis_of: std::collections::BTreeMap<u32, DVec3> = members
         .par_iter()

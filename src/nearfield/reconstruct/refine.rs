@@ -48,7 +48,7 @@
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::mesh::{components, Mesh};
+use super::mesh::{components, members, Mesh};
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::rayset::{Camera, Intrinsics, LuminanceImage};
 
@@ -161,10 +161,7 @@ pub struct PlaneFit {
 /// capture pixel's footprint. Returns what was done for each flat part.
 pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<PlaneFit> {
     let comp = components(mesh);
-    let mut parts: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
-    for (v, c) in comp.iter().enumerate() {
-        parts.entry(*c).or_default().push(v);
-    }
+    let parts = members(&comp);
     let mut fits = Vec::new();
     // Parts not flat on their own (too small to span a plane: a 3 mm dot is 3 units across), tried
     // again together: coplanar small features (led-dots' 32 dots) share one plane.
