@@ -30,26 +30,36 @@ pub struct LitMask {
     pub lit_pixels: u64,
     /// Largest luminance in the image (cd/m²).
     pub max_cd_m2: f32,
+    /// Least luminance of a lit pixel (cd/m²; 0 for an image with none).
+    pub floor_cd_m2: f32,
 }
 
 impl LitMask {
     /// The pixels of `img` at or above `relative · max` (and above 0), where max is the image's
     /// largest value (every pixel dark when that is 0); `None` when the image is wider than 65535 px.
     pub fn of(img: &LuminanceImage, relative: f32) -> Option<Self> {
+        let max = largest(img);
+        Self::above(img, max, relative * max)
+    }
+
+    /// The pixels of `img` at or above `relative · max` and at or above [`NOISE_SIGMAS`] times the
+    /// image's noise ([`noise_sigma`]): for a `relative` far below what [`Self::of`] is given, as
+    /// deep as the image's own noise lets a mask go. `None` as for [`Self::of`].
+    pub fn above_noise(img: &LuminanceImage, relative: f32) -> Option<Self> {
+        let max = largest(img);
+        Self::above(img, max, (relative * max).max(NOISE_SIGMAS * noise_sigma(img)))
+    }
+
+    /// The pixels of `img` at or above `floor` (and above 0); `max`: its largest value.
+    fn above(img: &LuminanceImage, max: f32, floor: f32) -> Option<Self> {
         let (w, h) = (img.width, img.height);
-        let max = img
-            .data
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(0.0f32, f32::max);
         if w > u32::from(u16::MAX) {
             return None;
         }
         if max <= 0.0 {
             return Some(Self::unlit(w, h));
         }
-        let floor = (relative * max).max(f32::MIN_POSITIVE);
+        let floor = floor.max(f32::MIN_POSITIVE);
         let (cw, ch) = (w.div_ceil(COARSE_PX), h.div_ceil(COARSE_PX));
         let mut lit_cells = vec![false; (cw * ch) as usize];
         let mut row_start = Vec::with_capacity(h as usize + 1);
@@ -87,6 +97,7 @@ impl LitMask {
             dist: chessboard(&lit_cells, cw as usize, ch as usize),
             lit_pixels,
             max_cd_m2: max,
+            floor_cd_m2: floor,
         })
     }
 
@@ -104,6 +115,7 @@ impl LitMask {
             dist: vec![255; (cw * ch) as usize],
             lit_pixels: 0,
             max_cd_m2: 0.0,
+            floor_cd_m2: 0.0,
         }
     }
 
@@ -218,6 +230,68 @@ impl LitMask {
 
 /// Chessboard distance (saturating at 255) from each cell to the nearest `true` cell; all 255 when
 /// there is none. Two passes with the 8-neighbourhood (exact for the chessboard metric).
+/// `img`'s largest finite value (cd/m²), 0 when none is positive.
+fn largest(img: &LuminanceImage) -> f32 {
+    img.data
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0f32, f32::max)
+}
+
+/// Standard deviations of an image's noise ([`noise_sigma`]) a pixel reaches to be lit in
+/// [`LitMask::above_noise`]: in a 1216 × 1021 image of Gaussian noise, 0.001 pixels on average lie
+/// beyond 6 σ (0.36 beyond 5 σ).
+pub const NOISE_SIGMAS: f32 = 6.0;
+
+/// Fewest pixels [`noise_sigma`] estimates from.
+pub const NOISE_MIN_PIXELS: usize = 64;
+
+/// The median of |x| for x drawn from a zero-mean normal distribution, in standard deviations.
+const HALF_NORMAL_MEDIAN: f32 = 0.674_49;
+
+/// One standard deviation (cd/m²) of the noise in `img`'s dark pixels, from what only noise makes
+/// in a dark-corrected luminance image:
+/// - **negative pixels**: when at least [`NOISE_MIN_PIXELS`] are negative, their median magnitude
+///   over the median of a half-normal distribution;
+/// - else **noise clipped at zero**: when at least a fifth of the zero pixels (and
+///   [`NOISE_MIN_PIXELS`]) have a positive right-hand neighbour, those neighbours' median over the
+///   same (half the neighbours of a zero in clipped noise are positive; in a noise-free image the
+///   zeros lie in runs and a zero's positive neighbour is an edge, a few per cent of them);
+/// - else **0**: a noise-free image (the synthetic scans).
+///
+/// An image whose dark level is not corrected (noise about a positive offset) shows neither, and
+/// is taken as noise-free.
+pub fn noise_sigma(img: &LuminanceImage) -> f32 {
+    let mut negative: Vec<f32> = img.data.iter().copied().filter(|v| *v < 0.0).map(|v| -v).collect();
+    if negative.len() >= NOISE_MIN_PIXELS {
+        return median(&mut negative) / HALF_NORMAL_MEDIAN;
+    }
+    let w = img.width as usize;
+    let mut zeros = 0usize;
+    let mut beside: Vec<f32> = Vec::new();
+    for row in img.data.chunks_exact(w.max(1)) {
+        for pair in row.windows(2) {
+            if pair[0] == 0.0 {
+                zeros += 1;
+                if pair[1] > 0.0 && pair[1].is_finite() {
+                    beside.push(pair[1]);
+                }
+            }
+        }
+    }
+    if beside.len() >= NOISE_MIN_PIXELS && 5 * beside.len() >= zeros {
+        return median(&mut beside) / HALF_NORMAL_MEDIAN;
+    }
+    0.0
+}
+
+/// The median of `v` (not empty; reordered).
+fn median(v: &mut [f32]) -> f32 {
+    let k = v.len() / 2;
+    *v.select_nth_unstable_by(k, f32::total_cmp).1
+}
+
 fn chessboard(lit: &[bool], w: usize, h: usize) -> Vec<u8> {
     let mut d: Vec<u8> = lit.iter().map(|&l| if l { 0 } else { 255 }).collect();
     let at = |x: usize, y: usize| y * w + x;
@@ -341,6 +415,81 @@ mod tests {
         assert!(!b.lit(11.0, 15.0, 1.0));
         assert!(!b.lit(25.0, 15.0, 1.0));
         assert!(!b.lit(15.0, 15.0, 20.0));
+    }
+
+    /// Standard normal numbers from a fixed seed (splitmix64 and Box–Muller).
+    fn normals(n: usize, seed: u64) -> Vec<f32> {
+        let mut state = seed;
+        let mut next = || {
+            state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = state;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let (u, v) = (next().max(1e-300), next());
+                ((-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()) as f32
+            })
+            .collect()
+    }
+
+    /// A 200 × 150 image: 10⁶ cd/m² in a 4 × 4 spot, 1 cd/m² in the box [40, 160) × [30, 120),
+    /// 0 elsewhere; plus Gaussian noise of `sigma` cd/m² (clipped at zero when `clip`).
+    fn spot_on_background(sigma: f32, clip: bool) -> LuminanceImage {
+        let (w, h) = (200u32, 150u32);
+        let mut img = LuminanceImage::zeros(w, h);
+        let noise = normals((w * h) as usize, 7);
+        for r in 0..h {
+            for c in 0..w {
+                let i = (r * w + c) as usize;
+                let mut v = if (98..102).contains(&c) && (73..77).contains(&r) {
+                    1.0e6
+                } else if (40..160).contains(&c) && (30..120).contains(&r) {
+                    1.0
+                } else {
+                    0.0
+                };
+                v += sigma * noise[i];
+                img.data[i] = if clip { v.max(0.0) } else { v };
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn noise_is_measured_from_negative_pixels_or_zeros_beside_clipped_noise() {
+        assert_eq!(noise_sigma(&spot_on_background(0.0, false)), 0.0, "noise-free");
+        for clip in [false, true] {
+            let s = noise_sigma(&spot_on_background(0.05, clip));
+            assert!((s / 0.05 - 1.0).abs() < 0.1, "clip {clip}: {s} for 0.05");
+        }
+        // A noise-free image of thin stripes: zeros beside lit pixels are edges, not noise.
+        let stripes: Vec<(u32, u32)> = (0..64).flat_map(|r| (0..64).step_by(8).map(move |c| (c, r))).collect();
+        assert_eq!(noise_sigma(&image_with(64, 64, &stripes)), 0.0);
+    }
+
+    #[test]
+    fn masks_above_the_noise_find_a_dim_background_beside_a_bright_spot() {
+        let background = 120 * 90;
+        // Relative to the spot, the background is below the default threshold: only the spot.
+        let m = LitMask::of(&spot_on_background(0.0, false), 1e-4).unwrap();
+        assert_eq!(m.lit_pixels, 16);
+        // Deeper, noise-free: the whole background.
+        let m = LitMask::above_noise(&spot_on_background(0.0, false), 1e-7).unwrap();
+        assert_eq!(m.lit_pixels, background);
+        // With noise of 0.05 cd/m², clipped or not: the background, and no pixel of the noise
+        // around it (6 σ = 0.3 cd/m²; 17,400 noise pixels).
+        for clip in [false, true] {
+            let m = LitMask::above_noise(&spot_on_background(0.05, clip), 1e-7).unwrap();
+            assert_eq!(m.lit_pixels, background, "clip {clip}");
+            assert!((0.29..0.33).contains(&m.floor_cd_m2), "clip {clip}: {}", m.floor_cd_m2);
+        }
+        // Noise as bright as the background hides it: a mask made at 1e-7 of the spot alone would
+        // light half the image.
+        let m = LitMask::above_noise(&spot_on_background(1.0, false), 1e-7).unwrap();
+        assert!(m.lit_pixels < 100, "{}", m.lit_pixels);
     }
 
     #[test]

@@ -5,9 +5,9 @@
 //! `render` and `lumi_luminaire_load` (manifests) store it as the pack's proxy through
 //! [`scan_proxy`]; `lumiview proxy` writes it as glTF and measures it (docs/proxy.md). Measured on
 //! synthetic scans (rigo:300, 256 × 256 px, 3 × 3 rays per pixel): Chamfer p95 within the limit
-//! for 9 of the 11 luminaires (flat sources, beams, small features); nothing useful survives for
-//! `reflector` (a mirror) and `peak` (a 10⁶ cd/m² spot on a 1 cd/m² background, beyond the masks'
-//! 10⁴ range): those scans render without a proxy, with a warning.
+//! for 10 of the 11 luminaires (flat sources, beams, small features, `peak`'s 10⁶ cd/m² spot on a
+//! 1 cd/m² background); nothing useful survives for `reflector` (a mirror): that scan renders
+//! without a proxy, with a warning.
 //!
 //! 1. **Cameras**: up to [`ReconstructOptions::max_cameras`], spread evenly over the directions of
 //!    the scan's cameras (the one nearest each point of a Fibonacci sphere).
@@ -16,7 +16,11 @@
 //!    distance map. Cameras whose brightest pixel is below [`ReconstructOptions::camera_relative`]
 //!    of the brightest camera's see the back of the source or nothing: every pixel of theirs counts
 //!    as dark, unless they lie on the lit side (within 90° of the mean direction of the cameras
-//!    that see light): they are outside a beam and are not used.
+//!    that see light): they are outside a beam and are not used. When the mesh made from these masks
+//!    explains less than [`MIN_COVERAGE`] of the light, the masks are made again down to
+//!    [`ReconstructOptions::deep_relative`] of each image's maximum, but above its noise
+//!    ([`LitMask::above_noise`]), and everything below is done again; the result that explains
+//!    more is kept (a dim background beside a bright spot).
 //! 3. **Carving** ([`carve`]): the content ball (where any camera saw light) in a cube, split as an
 //!    octree down to cells of about one capture pixel's footprint (at most
 //!    [`ReconstructOptions::max_cells`] per axis). A coarse cell is empty when a camera that sees all
@@ -76,6 +80,12 @@ pub struct ReconstructOptions {
     /// A camera is used when its maximum is at least this fraction of the brightest camera's;
     /// default 1e-6.
     pub camera_relative: f32,
+    /// When the masks at [`Self::lit_relative`] leave a mesh that explains less than
+    /// [`MIN_COVERAGE`] of the light, the masks are made again down to this fraction of each
+    /// image's maximum, but above its noise ([`LitMask::above_noise`]), and the scan carved again;
+    /// the result that explains more is kept. Default 1e-7: `peak`'s 1 cd/m² background beside its
+    /// 10⁶ cd/m² spot.
+    pub deep_relative: f32,
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it (a camera that
     /// samples points can miss a surface seen that obliquely); default 1. Below
     /// [`SMALL_FEATURE_GRAZING_DEG`], a carving that explains too little of the light is tried
@@ -103,6 +113,7 @@ impl Default for ReconstructOptions {
             max_cells: 256,
             lit_relative: 1e-4,
             camera_relative: 1e-6,
+            deep_relative: 1e-7,
             grazing_deg: 1.0,
             thin_fraction: 0.05,
             directional_fallback: false,
@@ -130,6 +141,7 @@ impl ReconstructOptions {
         for (v, name) in [
             (self.lit_relative, "reconstruct.lit_relative"),
             (self.camera_relative, "reconstruct.camera_relative"),
+            (self.deep_relative, "reconstruct.deep_relative"),
         ] {
             if !(v.is_finite() && v > 0.0 && v < 1.0) {
                 return Err(NearfieldError::invalid(name, format!("{v} is outside (0, 1)")));
@@ -158,6 +170,13 @@ pub struct ReconstructReport {
     pub cameras_read: usize,
     /// Cameras that saw enough light to carve.
     pub cameras_used: usize,
+    /// The masks' threshold, as a fraction of each image's maximum:
+    /// [`ReconstructOptions::lit_relative`], or [`ReconstructOptions::deep_relative`] when the masks
+    /// made above the images' noise explained more of the light.
+    pub lit_relative: f32,
+    /// Cameras whose masks' threshold was set by their image's noise rather than by
+    /// `lit_relative` (0 for noise-free images).
+    pub noise_floored: usize,
     /// Radius (m) of the ball about the capture centre where light was seen.
     pub content_radius_m: f64,
     /// Edge of a finest cell (m).
@@ -332,6 +351,41 @@ pub fn reconstruct(
     progress: Progress,
 ) -> Result<Reconstruction> {
     opts.validate()?;
+    let first = reconstruct_with(set, image, opts, Masks::Relative, progress)?;
+    if first.report.coverage >= MIN_COVERAGE || opts.deep_relative >= opts.lit_relative {
+        return Ok(first);
+    }
+    // Too little of the light explained: perhaps light below the masks' threshold beside a much
+    // brighter spot (peak) made every camera that sees the spot carve it.
+    let first_s = first.report.seconds;
+    let deep = reconstruct_with(set, image, opts, Masks::AboveNoise, progress)?;
+    let deep_s = deep.report.seconds;
+    let mut best = if deep.report.coverage > first.report.coverage {
+        deep
+    } else {
+        first
+    };
+    best.report.seconds = std::array::from_fn(|k| first_s[k] + deep_s[k]);
+    Ok(best)
+}
+
+/// How [`reconstruct_with`] makes the masks.
+#[derive(Clone, Copy, PartialEq)]
+enum Masks {
+    /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`].
+    Relative,
+    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`].
+    AboveNoise,
+}
+
+/// [`reconstruct`] with one kind of masks.
+fn reconstruct_with(
+    set: &RayImageSet,
+    image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
+    opts: &ReconstructOptions,
+    masks_kind: Masks,
+    progress: Progress,
+) -> Result<Reconstruction> {
     let t0 = Instant::now();
     let chosen = spread_cameras(set, opts.max_cameras);
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -339,13 +393,28 @@ pub fn reconstruct(
         .par_iter()
         .map(|&i| {
             let img = image(i)?;
-            let m = LitMask::of(&img, opts.lit_relative);
+            let m = match masks_kind {
+                Masks::Relative => LitMask::of(&img, opts.lit_relative),
+                Masks::AboveNoise => LitMask::above_noise(&img, opts.deep_relative),
+            };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress("masks", d, chosen.len());
             Ok(m)
         })
         .collect::<Result<_>>()?;
+    let lit_relative = match masks_kind {
+        Masks::Relative => opts.lit_relative,
+        Masks::AboveNoise => opts.deep_relative,
+    };
+    let noise_floored = masks
+        .iter()
+        .flatten()
+        .filter(|m| m.floor_cd_m2 > lit_relative * m.max_cd_m2 * 1.001)
+        .count();
     let brightest = masks.iter().flatten().map(|m| m.max_cd_m2).fold(0.0f32, f32::max);
+    // A camera sees light when its brightest pixel is not far below the brightest camera's and
+    // some pixel of its mask is lit (above its image's noise, when the masks are made so).
+    let sees_light = |m: &LitMask| m.max_cd_m2 >= opts.camera_relative * brightest && m.lit_pixels > 0;
     if brightest <= 0.0 {
         return Err(NearfieldError::invalid(
             "scan",
@@ -361,10 +430,7 @@ pub fn reconstruct(
     let lit_axis = chosen
         .iter()
         .zip(&masks)
-        .filter(|(_, m)| {
-            m.as_ref()
-                .is_some_and(|m| m.max_cd_m2 >= opts.camera_relative * brightest)
-        })
+        .filter(|(_, m)| m.as_ref().is_some_and(sees_light))
         .map(|(&i, _)| set.cameras[i].direction_from(centre))
         .sum::<DVec3>()
         .normalize_or_zero();
@@ -376,7 +442,7 @@ pub fn reconstruct(
     for (&i, m) in chosen.iter().zip(masks) {
         let Some(mut m) = m else { continue };
         let cam = &set.cameras[i];
-        if m.max_cd_m2 < opts.camera_relative * brightest {
+        if !sees_light(&m) {
             if cam.direction_from(centre).dot(lit_axis) > 0.0 {
                 outside_beam += 1;
                 // On the lit side, yet no light: outside a beam. Its darkness says nothing about
@@ -536,6 +602,8 @@ pub fn reconstruct(
     let report = ReconstructReport {
         cameras_read: chosen.len(),
         cameras_used,
+        lit_relative,
+        noise_floored,
         content_radius_m: content,
         voxel_m: occupancy.voxel_m,
         cells_per_axis: occupancy.n,

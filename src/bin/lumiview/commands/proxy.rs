@@ -53,6 +53,10 @@ pub struct ProxyArgs {
     /// Most cells per axis of the finest carving level.
     #[arg(long, default_value_t = ReconstructOptions::default().max_cells, value_name = "N")]
     pub max_cells: usize,
+    /// A pixel is lit at or above this fraction of its image's maximum (and above the image's
+    /// noise floor).
+    #[arg(long, default_value_t = ReconstructOptions::default().lit_relative, value_name = "F")]
+    pub lit_relative: f32,
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it.
     #[arg(long, default_value_t = ReconstructOptions::default().grazing_deg, value_name = "DEG")]
     pub grazing_deg: f64,
@@ -84,6 +88,7 @@ impl ProxyArgs {
             max_cameras: self.max_cameras,
             max_cells: self.max_cells,
             grazing_deg: self.grazing_deg,
+            lit_relative: self.lit_relative,
             thin_fraction: self.thin_fraction,
             directional_fallback: self.directional,
             refine_flat: !self.no_refine,
@@ -157,6 +162,8 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "stray_triangles": r.stray_triangles,
         "directional": r.directional,
         "grazing_deg": r.grazing_deg,
+        "lit_relative": r.lit_relative,
+        "noise_floored_cameras": r.noise_floored,
         "flat_parts": r.flat_parts.iter().map(|f| json!({
             "vertices": f.vertices,
             "absorbed": f.absorbed,
@@ -440,12 +447,18 @@ fn synth_table(args: &ProxyArgs, names: &str) -> CliResult {
     print_report(&out)
 }
 
-/// The carving rule the kept mesh came from (the one-sided rule with its grazing tolerance).
+/// The carving rule the kept mesh came from (the one-sided rule with its grazing tolerance), with
+/// the masks' threshold when they were made deeper than the default.
 fn rule_name(r: &lumiview::nearfield::reconstruct::ReconstructReport) -> String {
-    if r.directional {
+    let rule = if r.directional {
         "dir".into()
     } else {
         format!("1s {:.0}°", r.grazing_deg)
+    };
+    if r.lit_relative < ReconstructOptions::default().lit_relative {
+        format!("{rule} {:.0e}", r.lit_relative)
+    } else {
+        rule
     }
 }
 
