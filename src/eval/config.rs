@@ -100,7 +100,8 @@ pub struct EvalConfig {
     pub modes: Vec<EvalMode>,
     /// Where packs are written.
     pub work_dir: PathBuf,
-    /// Where the worst views are written as images (render | reference | error), if anywhere.
+    /// Where the worst views are written as images (render | reference | error), and the
+    /// reconstructed proxy as `NAME-rec-proxy.glb`, if anywhere.
     pub images_dir: Option<PathBuf>,
     /// Samples per capture pixel along each axis: 1 point-samples the captures (the contract), N
     /// averages N × N samples over each pixel, as a sensor integrates (for docs/nearfield-rendering.md

@@ -51,6 +51,10 @@ pub fn evaluate(
         // (or, where none is kept, without a proxy: what the user then sees).
         let (tris, warnings) = reconstructed_proxy(&p, progress)?;
         notes.extend(warnings);
+        if let (Some(dir), Some(t)) = (&cfg.images_dir, &tris) {
+            crate::nearfield::proxy::mesh_of_triangles(name, "reconstructed", t)
+                .write_glb(&dir.join(format!("{name}-rec-proxy.glb")))?;
+        }
         let kept = tris.is_some();
         let rec_opts = NearfieldOptions {
             proxy_is_bound: crate::nearfield::reconstruct::PROXY_IS_BOUND,

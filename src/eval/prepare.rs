@@ -156,7 +156,8 @@ fn reconstruct_intrinsics(k: &Intrinsics) -> Intrinsics {
     }
 }
 
-/// A reconstructed proxy's triangles (`None` when none is kept) and the warnings saying why.
+/// A reconstructed proxy's triangles (`None` when none is kept) and notes: what was kept, or the
+/// warnings saying why none was.
 pub(super) type ReconstructedProxy = (Option<Vec<[f32; 3]>>, Vec<String>);
 
 /// The proxy `lumiview pack --synth` would store for `p`'s scan: reconstructed from its cameras
@@ -184,5 +185,15 @@ pub(super) fn reconstructed_proxy(p: &Prepared, progress: &dyn Fn(&str)) -> Resu
     };
     let mut warnings = Vec::new();
     let rec = crate::nearfield::reconstruct::scan_proxy(&scan, p.lum.name(), &|_, _, _| {}, &mut warnings)?;
+    if let Some(r) = &rec {
+        let rep = &r.report;
+        warnings.push(format!(
+            "continuous+rec-proxy: {}; it explains {:.1} % of the lit pixels (masks at {:.0e} of each image's maximum, carving 1s {:.0}°)",
+            r.to_pack_proxy().source,
+            rep.coverage * 100.0,
+            rep.lit_relative,
+            rep.grazing_deg
+        ));
+    }
     Ok((rec.map(|r| r.mesh.soup()), warnings))
 }

@@ -57,7 +57,8 @@ pub struct EvalArgs {
     #[arg(long, default_value = "target/eval")]
     pub work_dir: PathBuf,
     /// Write the worst outside and inside view of each luminaire and mode here as PNGs
-    /// (render | reference | relative error).
+    /// (render | reference | relative error), and with --reconstructed-proxy the proxy as
+    /// NAME-rec-proxy.glb.
     #[arg(long, value_name = "DIR")]
     pub images: Option<PathBuf>,
     /// Also write the table here.
