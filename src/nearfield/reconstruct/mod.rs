@@ -174,6 +174,8 @@ pub struct ReconstructReport {
     /// [`ReconstructOptions::lit_relative`], or [`ReconstructOptions::deep_relative`] when the masks
     /// made above the images' noise explained more of the light.
     pub lit_relative: f32,
+    /// Lit pixels of the masks of the cameras that carve.
+    pub lit_pixels: u64,
     /// Cameras whose masks' threshold was set by their image's noise rather than by
     /// `lit_relative` (0 for noise-free images).
     pub noise_floored: usize,
@@ -351,14 +353,21 @@ pub fn reconstruct(
     progress: Progress,
 ) -> Result<Reconstruction> {
     opts.validate()?;
-    let first = reconstruct_with(set, image, opts, Masks::Relative, progress)?;
+    let Some(first) = reconstruct_with(set, image, opts, Masks::Relative, progress)? else {
+        return Err(NearfieldError::invalid(
+            "scan",
+            "no camera read sees any light: nothing to reconstruct",
+        ));
+    };
     if first.report.coverage >= MIN_COVERAGE || opts.deep_relative >= opts.lit_relative {
         return Ok(first);
     }
     // Too little of the light explained: perhaps light below the masks' threshold beside a much
     // brighter spot (peak) made every camera that sees the spot carve it.
     let first_s = first.report.seconds;
-    let deep = reconstruct_with(set, image, opts, Masks::AboveNoise, progress)?;
+    let Some(deep) = reconstruct_with(set, image, opts, Masks::AboveNoise(first.report.lit_pixels), progress)? else {
+        return Ok(first);
+    };
     let deep_s = deep.report.seconds;
     let mut best = if deep.report.coverage > first.report.coverage {
         deep
@@ -374,18 +383,24 @@ pub fn reconstruct(
 enum Masks {
     /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`].
     Relative,
-    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`].
-    AboveNoise,
+    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when they
+    /// hold more than [`DEEP_MIN_GAIN`] more lit pixels than the first masks' (given).
+    AboveNoise(u64),
 }
 
-/// [`reconstruct`] with one kind of masks.
+/// The masks made above the noise are carved only when they light at least this fraction more
+/// pixels than the first masks: else (a noisy camera whose noise lies above 10⁻⁴ of its maximum, a
+/// mirror) carving them again would give the same result at twice the cost.
+pub const DEEP_MIN_GAIN: f64 = 0.01;
+
+/// [`reconstruct`] with one kind of masks; `None` when the masks above the noise add nothing.
 fn reconstruct_with(
     set: &RayImageSet,
     image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
     opts: &ReconstructOptions,
     masks_kind: Masks,
     progress: Progress,
-) -> Result<Reconstruction> {
+) -> Result<Option<Reconstruction>> {
     let t0 = Instant::now();
     let chosen = spread_cameras(set, opts.max_cameras);
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -395,16 +410,16 @@ fn reconstruct_with(
             let img = image(i)?;
             let m = match masks_kind {
                 Masks::Relative => LitMask::of(&img, opts.lit_relative),
-                Masks::AboveNoise => LitMask::above_noise(&img, opts.deep_relative),
+                Masks::AboveNoise(_) => LitMask::above_noise(&img, opts.deep_relative),
             };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress("masks", d, chosen.len());
             Ok(m)
         })
         .collect::<Result<_>>()?;
-    let lit_relative = match masks_kind {
-        Masks::Relative => opts.lit_relative,
-        Masks::AboveNoise => opts.deep_relative,
+    let (lit_relative, more_than) = match masks_kind {
+        Masks::Relative => (opts.lit_relative, 0.0),
+        Masks::AboveNoise(first) => (opts.deep_relative, (1.0 + DEEP_MIN_GAIN) * first as f64),
     };
     let noise_floored = masks
         .iter()
@@ -469,6 +484,12 @@ fn reconstruct_with(
             intrinsics: k,
             mask: m,
         });
+    }
+    // Lit pixels of the cameras that carve (a camera that sees no light counts none, whatever its
+    // noise lit).
+    let lit_pixels: u64 = views.iter().map(|v| v.mask.lit_pixels).sum();
+    if lit_pixels as f64 <= more_than {
+        return Ok(None);
     }
     let content = (content * 1.02).min(set.sphere.radius_m * 0.999);
     let mask_bytes = views.iter().map(|v| v.mask.bytes()).sum();
@@ -603,6 +624,7 @@ fn reconstruct_with(
         cameras_read: chosen.len(),
         cameras_used,
         lit_relative,
+        lit_pixels,
         noise_floored,
         content_radius_m: content,
         voxel_m: occupancy.voxel_m,
@@ -629,11 +651,11 @@ fn reconstruct_with(
             t_refine.elapsed().as_secs_f64(),
         ],
     };
-    Ok(Reconstruction {
+    Ok(Some(Reconstruction {
         mesh,
         occupancy,
         report,
-    })
+    }))
 }
 
 /// The pixels `[c0, c1) × [r0, r1)` of camera `i`'s image that can show `bounds` (luminaire

@@ -163,6 +163,7 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
         "directional": r.directional,
         "grazing_deg": r.grazing_deg,
         "lit_relative": r.lit_relative,
+        "lit_pixels": r.lit_pixels,
         "noise_floored_cameras": r.noise_floored,
         "flat_parts": r.flat_parts.iter().map(|f| json!({
             "vertices": f.vertices,
