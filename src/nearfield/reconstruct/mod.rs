@@ -16,11 +16,13 @@
 //!    distance map. Cameras whose brightest pixel is below [`ReconstructOptions::camera_relative`]
 //!    of the brightest camera's see the back of the source or nothing: every pixel of theirs counts
 //!    as dark, unless they lie on the lit side (within 90° of the mean direction of the cameras
-//!    that see light): they are outside a beam and are not used. When the mesh made from these masks
-//!    explains less than [`MIN_COVERAGE`] of the light, the masks are made again down to
-//!    [`ReconstructOptions::deep_relative`] of each image's maximum, but above its noise
-//!    ([`LitMask::above_noise`]), and everything below is done again; the result that explains
-//!    more is kept (a dim background beside a bright spot).
+//!    that see light): they are outside a beam and are not used. The masks are then made again
+//!    down to [`ReconstructOptions::deep_relative`] of each image's maximum, but above its noise
+//!    ([`LitMask::above_noise`]), and everything below is done again with them when the first
+//!    masks' mesh explains less than [`MIN_COVERAGE`] of the light and these light
+//!    [`DEEP_MIN_GAIN`] more pixels (the result that explains more is kept), or when these light
+//!    [`DEEP_TRIGGER_GAIN`] more (kept when it explains enough of its light): a dim background
+//!    beside a bright spot.
 //! 3. **Carving** ([`carve`]): the content ball (where any camera saw light) in a cube, split as an
 //!    octree down to cells of about one capture pixel's footprint (at most
 //!    [`ReconstructOptions::max_cells`] per axis). A coarse cell is empty when a camera that sees all
@@ -80,11 +82,10 @@ pub struct ReconstructOptions {
     /// A camera is used when its maximum is at least this fraction of the brightest camera's;
     /// default 1e-6.
     pub camera_relative: f32,
-    /// When the masks at [`Self::lit_relative`] leave a mesh that explains less than
-    /// [`MIN_COVERAGE`] of the light, the masks are made again down to this fraction of each
-    /// image's maximum, but above its noise ([`LitMask::above_noise`]), and the scan carved again;
-    /// the result that explains more is kept. Default 1e-7: `peak`'s 1 cd/m² background beside its
-    /// 10⁶ cd/m² spot.
+    /// The masks are made again down to this fraction of each image's maximum, but above its noise
+    /// ([`LitMask::above_noise`]), and the scan carved again with them when they light more pixels
+    /// ([`reconstruct`], step 2 of the module's list); equal to [`Self::lit_relative`] or above:
+    /// never. Default 1e-7: `peak`'s 1 cd/m² background beside its 10⁶ cd/m² spot.
     pub deep_relative: f32,
     /// Dark cameras within this angle (degrees) of a surface's plane do not carve it (a camera that
     /// samples points can miss a surface seen that obliquely); default 1. Below
@@ -172,7 +173,7 @@ pub struct ReconstructReport {
     pub cameras_used: usize,
     /// The masks' threshold, as a fraction of each image's maximum:
     /// [`ReconstructOptions::lit_relative`], or [`ReconstructOptions::deep_relative`] when the masks
-    /// made above the images' noise explained more of the light.
+    /// made above the images' noise were kept.
     pub lit_relative: f32,
     /// Lit pixels of the masks of the cameras that carve.
     pub lit_pixels: u64,
@@ -359,21 +360,30 @@ pub fn reconstruct(
             "no camera read sees any light: nothing to reconstruct",
         ));
     };
-    if first.report.coverage >= MIN_COVERAGE || opts.deep_relative >= opts.lit_relative {
+    if opts.deep_relative >= opts.lit_relative {
         return Ok(first);
     }
-    // Too little of the light explained: perhaps light below the masks' threshold beside a much
-    // brighter spot (peak) made every camera that sees the spot carve it.
+    // Light below the masks' threshold beside a much brighter spot (peak): every camera that sees
+    // the spot carves it. Looked for again above the images' noise when the mesh explains too
+    // little of the light, or when those masks light far more pixels (the coverage is sampled
+    // over 64 cameras, and the few that miss the spot, which see the dim surface lit, may be
+    // among them or not).
+    let explained = first.report.coverage >= MIN_COVERAGE;
+    let gain = if explained { DEEP_TRIGGER_GAIN } else { DEEP_MIN_GAIN };
+    let more_than = (1.0 + gain) * first.report.lit_pixels as f64;
     let first_s = first.report.seconds;
-    let Some(deep) = reconstruct_with(set, image, opts, Masks::AboveNoise(first.report.lit_pixels), progress)? else {
+    let Some(deep) = reconstruct_with(set, image, opts, Masks::AboveNoise(more_than), progress)? else {
         return Ok(first);
     };
     let deep_s = deep.report.seconds;
-    let mut best = if deep.report.coverage > first.report.coverage {
-        deep
+    // Taken when it explains more of the light, or (the first explaining enough of its own) when
+    // it explains enough of its larger share.
+    let take = if explained {
+        deep.report.coverage >= MIN_COVERAGE.max(first.report.coverage - DEEP_COVERAGE_SLACK)
     } else {
-        first
+        deep.report.coverage > first.report.coverage
     };
+    let mut best = if take { deep } else { first };
     best.report.seconds = std::array::from_fn(|k| first_s[k] + deep_s[k]);
     Ok(best)
 }
@@ -383,15 +393,25 @@ pub fn reconstruct(
 enum Masks {
     /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`].
     Relative,
-    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when they
-    /// hold more than [`DEEP_MIN_GAIN`] more lit pixels than the first masks' (given).
-    AboveNoise(u64),
+    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when the
+    /// carving cameras' masks hold more lit pixels than given.
+    AboveNoise(f64),
 }
 
-/// The masks made above the noise are carved only when they light at least this fraction more
-/// pixels than the first masks: else (a noisy camera whose noise lies above 10⁻⁴ of its maximum, a
-/// mirror) carving them again would give the same result at twice the cost.
+/// When the first masks' mesh explains too little of the light, the masks made above the noise are
+/// carved only when they light at least this fraction more pixels than the first masks: else (a
+/// noisy camera whose noise lies above 10⁻⁴ of its maximum, a mirror) carving them again would
+/// give the same result at twice the cost.
 pub const DEEP_MIN_GAIN: f64 = 0.01;
+
+/// When the first masks' mesh explains enough of the light, the masks made above the noise are
+/// still carved when they light at least this fraction more pixels (a dim surface the first masks
+/// left out) ...
+pub const DEEP_TRIGGER_GAIN: f64 = 0.1;
+
+/// ... and that mesh is taken when it explains at least [`MIN_COVERAGE`] of its light and no less
+/// than the first's coverage minus this.
+pub const DEEP_COVERAGE_SLACK: f64 = 0.02;
 
 /// [`reconstruct`] with one kind of masks; `None` when the masks above the noise add nothing.
 fn reconstruct_with(
@@ -419,7 +439,7 @@ fn reconstruct_with(
         .collect::<Result<_>>()?;
     let (lit_relative, more_than) = match masks_kind {
         Masks::Relative => (opts.lit_relative, 0.0),
-        Masks::AboveNoise(first) => (opts.deep_relative, (1.0 + DEEP_MIN_GAIN) * first as f64),
+        Masks::AboveNoise(more_than) => (opts.deep_relative, more_than),
     };
     let noise_floored = masks
         .iter()
