@@ -50,6 +50,22 @@ impl LitMask {
         Self::above(img, max, (relative * max).max(NOISE_SIGMAS * noise_sigma(img)))
     }
 
+    /// How many pixels `LitMask::above_noise(img, relative)` lights (`None` as it gives), without
+    /// making the mask.
+    pub fn count_above_noise(img: &LuminanceImage, relative: f32) -> Option<u64> {
+        if img.width > u32::from(u16::MAX) {
+            return None;
+        }
+        let max = largest(img);
+        if max <= 0.0 {
+            return Some(0);
+        }
+        let floor = (relative * max)
+            .max(NOISE_SIGMAS * noise_sigma(img))
+            .max(f32::MIN_POSITIVE);
+        Some(img.data.iter().filter(|v| **v >= floor).count() as u64)
+    }
+
     /// The pixels of `img` at or above `floor` (and above 0); `max`: its largest value.
     fn above(img: &LuminanceImage, max: f32, floor: f32) -> Option<Self> {
         let (w, h) = (img.width, img.height);
@@ -490,6 +506,24 @@ mod tests {
         // light half the image.
         let m = LitMask::above_noise(&spot_on_background(1.0, false), 1e-7).unwrap();
         assert!(m.lit_pixels < 100, "{}", m.lit_pixels);
+    }
+
+    #[test]
+    fn counting_above_the_noise_counts_what_the_mask_lights() {
+        for (sigma, clip) in [(0.0, false), (0.05, false), (0.05, true), (1.0, false)] {
+            let img = spot_on_background(sigma, clip);
+            for relative in [1e-7, 1e-4, 0.5] {
+                let m = LitMask::above_noise(&img, relative).unwrap();
+                let n = LitMask::count_above_noise(&img, relative).unwrap();
+                assert_eq!(n, m.lit_pixels, "sigma {sigma} clip {clip} relative {relative}");
+            }
+        }
+        let dark = LuminanceImage {
+            width: 4,
+            height: 2,
+            data: vec![0.0; 8],
+        };
+        assert_eq!(LitMask::count_above_noise(&dark, 1e-7), Some(0));
     }
 
     #[test]

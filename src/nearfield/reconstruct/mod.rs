@@ -354,13 +354,15 @@ pub fn reconstruct(
     progress: Progress,
 ) -> Result<Reconstruction> {
     opts.validate()?;
-    let Some(first) = reconstruct_with(set, image, opts, Masks::Relative, progress)? else {
+    let deep = opts.deep_relative < opts.lit_relative;
+    let (first, deep_lit_pixels) = reconstruct_with(set, image, opts, Masks::Relative { count_deep: deep }, progress)?;
+    let Some(first) = first else {
         return Err(NearfieldError::invalid(
             "scan",
             "no camera read sees any light: nothing to reconstruct",
         ));
     };
-    if opts.deep_relative >= opts.lit_relative {
+    if !deep {
         return Ok(first);
     }
     // Light below the masks' threshold beside a much brighter spot (peak): every camera that sees
@@ -371,8 +373,12 @@ pub fn reconstruct(
     let explained = first.report.coverage >= MIN_COVERAGE;
     let gain = if explained { DEEP_TRIGGER_GAIN } else { DEEP_MIN_GAIN };
     let more_than = (1.0 + gain) * first.report.lit_pixels as f64;
+    // Counted while the first masks were made: the images are read again only to carve.
+    if deep_lit_pixels as f64 <= more_than {
+        return Ok(first);
+    }
     let first_s = first.report.seconds;
-    let Some(deep) = reconstruct_with(set, image, opts, Masks::AboveNoise(more_than), progress)? else {
+    let (Some(deep), _) = reconstruct_with(set, image, opts, Masks::AboveNoise(more_than), progress)? else {
         return Ok(first);
     };
     let deep_s = deep.report.seconds;
@@ -391,8 +397,9 @@ pub fn reconstruct(
 /// How [`reconstruct_with`] makes the masks.
 #[derive(Clone, Copy, PartialEq)]
 enum Masks {
-    /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`].
-    Relative,
+    /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`]; with `count_deep`, the pixels
+    /// [`Self::AboveNoise`]'s masks would light are counted too.
+    Relative { count_deep: bool },
     /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when the
     /// carving cameras' masks hold more lit pixels than given.
     AboveNoise(f64),
@@ -414,31 +421,43 @@ pub const DEEP_TRIGGER_GAIN: f64 = 0.1;
 pub const DEEP_COVERAGE_SLACK: f64 = 0.02;
 
 /// [`reconstruct`] with one kind of masks; `None` when the masks above the noise add nothing.
+/// Also: the pixels the masks above the noise would light in the cameras that would carve with
+/// them (counted with `Masks::Relative { count_deep: true }`, else 0), which decides whether they
+/// add anything without reading the images again.
 fn reconstruct_with(
     set: &RayImageSet,
     image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
     opts: &ReconstructOptions,
     masks_kind: Masks,
     progress: Progress,
-) -> Result<Option<Reconstruction>> {
+) -> Result<(Option<Reconstruction>, u64)> {
     let t0 = Instant::now();
     let chosen = spread_cameras(set, opts.max_cameras);
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let masks: Vec<Option<LitMask>> = chosen
+    let (masks, deep_counts): (Vec<Option<LitMask>>, Vec<u64>) = chosen
         .par_iter()
         .map(|&i| {
             let img = image(i)?;
-            let m = match masks_kind {
-                Masks::Relative => LitMask::of(&img, opts.lit_relative),
-                Masks::AboveNoise(_) => LitMask::above_noise(&img, opts.deep_relative),
+            let (m, deep) = match masks_kind {
+                Masks::Relative { count_deep } => (
+                    LitMask::of(&img, opts.lit_relative),
+                    if count_deep {
+                        LitMask::count_above_noise(&img, opts.deep_relative).unwrap_or(0)
+                    } else {
+                        0
+                    },
+                ),
+                Masks::AboveNoise(_) => (LitMask::above_noise(&img, opts.deep_relative), 0),
             };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress("masks", d, chosen.len());
-            Ok(m)
+            Ok((m, deep))
         })
-        .collect::<Result<_>>()?;
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .unzip();
     let (lit_relative, more_than) = match masks_kind {
-        Masks::Relative => (opts.lit_relative, 0.0),
+        Masks::Relative { .. } => (opts.lit_relative, 0.0),
         Masks::AboveNoise(more_than) => (opts.deep_relative, more_than),
     };
     let noise_floored = masks
@@ -450,6 +469,17 @@ fn reconstruct_with(
     // A camera sees light when its brightest pixel is not far below the brightest camera's and
     // some pixel of its mask is lit (above its image's noise, when the masks are made so).
     let sees_light = |m: &LitMask| m.max_cd_m2 >= opts.camera_relative * brightest && m.lit_pixels > 0;
+    // As `lit_pixels` below would count them with the masks above the noise: a camera carves with
+    // those when its brightest pixel is bright enough and they light some pixel.
+    let deep_lit_pixels: u64 = masks
+        .iter()
+        .zip(&deep_counts)
+        .filter(|(m, _)| {
+            m.as_ref()
+                .is_some_and(|m| m.max_cd_m2 >= opts.camera_relative * brightest)
+        })
+        .map(|(_, n)| n)
+        .sum();
     if brightest <= 0.0 {
         return Err(NearfieldError::invalid(
             "scan",
@@ -509,7 +539,7 @@ fn reconstruct_with(
     // noise lit).
     let lit_pixels: u64 = views.iter().map(|v| v.mask.lit_pixels).sum();
     if lit_pixels as f64 <= more_than {
-        return Ok(None);
+        return Ok((None, deep_lit_pixels));
     }
     let content = (content * 1.02).min(set.sphere.radius_m * 0.999);
     let mask_bytes = views.iter().map(|v| v.mask.bytes()).sum();
@@ -671,11 +701,14 @@ fn reconstruct_with(
             t_refine.elapsed().as_secs_f64(),
         ],
     };
-    Ok(Some(Reconstruction {
-        mesh,
-        occupancy,
-        report,
-    }))
+    Ok((
+        Some(Reconstruction {
+            mesh,
+            occupancy,
+            report,
+        }),
+        deep_lit_pixels,
+    ))
 }
 
 /// The pixels `[c0, c1) × [r0, r1)` of camera `i`'s image that can show `bounds` (luminaire
