@@ -100,8 +100,15 @@ fn reconstruction_is_near_the_true_proxy() {
 /// led-dots 0.05 / 0.18 mm (limit 3.81), carved at 30°; coverage 1.000.
 #[test]
 fn beams_and_small_features_get_a_proxy() {
-    for (name, grazing_deg) in [("cos100", 1.0), ("led-dots", 30.0)] {
-        let scan = synth_scan(&opts(name, 300, 3)).unwrap();
+    // led-dots at 256 px: its 3 mm dots are then about three capture pixels across, what the
+    // redrawing needs to tell their area (at 128 px, 1.6 pixels across, they come out 39 % large:
+    // docs/proxy.md, known limits).
+    for (name, grazing_deg, px) in [("cos100", 1.0, 128), ("led-dots", 30.0, 256)] {
+        let scan = synth_scan(&SynthOptions {
+            size: (px, px),
+            ..opts(name, 300, 3)
+        })
+        .unwrap();
         let mut warnings = Vec::new();
         let rec = scan_proxy(&scan, name, &|_, _, _| {}, &mut warnings)
             .unwrap()
@@ -125,8 +132,25 @@ fn beams_and_small_features_get_a_proxy() {
             "{name}: grazing {}°",
             r.grazing_deg
         );
+        if name == "led-dots" {
+            // Each dot redrawn from the images (docs/proxy.md, step 5): a polygon on both sheets,
+            // of the dot's area; the mesh is nothing else, so half its area is the dots'.
+            let redrawn: usize = r.flat_parts.iter().map(|f| f.redrawn).sum();
+            let ratio = rec.mesh.area() / 2.0 / (32.0 * std::f64::consts::PI * 1.5e-3f64.powi(2));
+            eprintln!("led-dots: {redrawn} dots redrawn, area {ratio:.4} of the dots'");
+            assert_eq!(redrawn, 32);
+            assert!(
+                (ratio - 1.0).abs() < DOTS_AREA_TOLERANCE,
+                "area {ratio:.4} of the dots'"
+            );
+        }
     }
 }
+
+/// The dots' area after redrawing, measured 0.4 % large here (rigo:300, 256 px; the rendered flux,
+/// which the contract asks within 1 %, follows it: docs/proxy.md); crumpled and followed vertex by
+/// vertex it was 3–28 % too large.
+const DOTS_AREA_TOLERANCE: f64 = 0.01;
 
 /// The known limit at a sparse layout (docs/proxy.md): at rigo:150 the disc keeps part of a
 /// floating lens bottom in front of it (measured mean 0.82 mm, max 16.8 mm; before the flat-part

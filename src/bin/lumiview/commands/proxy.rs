@@ -172,6 +172,7 @@ fn report_json(rec: &Reconstruction) -> serde_json::Value {
             "offset_mm": f.offset_m * 1e3,
             "disagreement": f.cost,
             "cameras": f.cameras,
+            "small_parts_redrawn": f.redrawn,
         })).collect::<Vec<_>>(),
         "simplified": {
             "triangles_before": r.simplified.triangles_before,
