@@ -46,13 +46,24 @@ impl LitMask {
     /// image's noise ([`noise_sigma`]): for a `relative` far below what [`Self::of`] is given, as
     /// deep as the image's own noise lets a mask go. `None` as for [`Self::of`].
     pub fn above_noise(img: &LuminanceImage, relative: f32) -> Option<Self> {
+        Self::above_noise_with(img, relative, noise_sigma(img))
+    }
+
+    /// [`Self::above_noise`] with the image's noise given (one standard deviation, cd/m², as
+    /// [`noise_sigma`] gives it).
+    pub fn above_noise_with(img: &LuminanceImage, relative: f32, sigma: f32) -> Option<Self> {
         let max = largest(img);
-        Self::above(img, max, (relative * max).max(NOISE_SIGMAS * noise_sigma(img)))
+        Self::above(img, max, (relative * max).max(NOISE_SIGMAS * sigma))
     }
 
     /// How many pixels `LitMask::above_noise(img, relative)` lights (`None` as it gives), without
     /// making the mask.
     pub fn count_above_noise(img: &LuminanceImage, relative: f32) -> Option<u64> {
+        Self::count_above_noise_with(img, relative, noise_sigma(img))
+    }
+
+    /// [`Self::count_above_noise`] with the image's noise given, as for [`Self::above_noise_with`].
+    pub fn count_above_noise_with(img: &LuminanceImage, relative: f32, sigma: f32) -> Option<u64> {
         if img.width > u32::from(u16::MAX) {
             return None;
         }
@@ -60,9 +71,7 @@ impl LitMask {
         if max <= 0.0 {
             return Some(0);
         }
-        let floor = (relative * max)
-            .max(NOISE_SIGMAS * noise_sigma(img))
-            .max(f32::MIN_POSITIVE);
+        let floor = (relative * max).max(NOISE_SIGMAS * sigma).max(f32::MIN_POSITIVE);
         Some(img.data.iter().filter(|v| **v >= floor).count() as u64)
     }
 

@@ -397,7 +397,8 @@ pub fn reconstruct(
 /// How [`reconstruct_with`] makes the masks.
 #[derive(Clone, Copy, PartialEq)]
 enum Masks {
-    /// [`LitMask::of`] at [`ReconstructOptions::lit_relative`]; with `count_deep`, the pixels
+    /// [`LitMask::above_noise`] at [`ReconstructOptions::lit_relative`] (as [`LitMask::of`] for an
+    /// image whose noise lies below that); with `count_deep`, the pixels
     /// [`Self::AboveNoise`]'s masks would light are counted too.
     Relative { count_deep: bool },
     /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when the
@@ -438,16 +439,17 @@ fn reconstruct_with(
         .par_iter()
         .map(|&i| {
             let img = image(i)?;
+            let sigma = mask::noise_sigma(&img);
             let (m, deep) = match masks_kind {
                 Masks::Relative { count_deep } => (
-                    LitMask::of(&img, opts.lit_relative),
+                    LitMask::above_noise_with(&img, opts.lit_relative, sigma),
                     if count_deep {
-                        LitMask::count_above_noise(&img, opts.deep_relative).unwrap_or(0)
+                        LitMask::count_above_noise_with(&img, opts.deep_relative, sigma).unwrap_or(0)
                     } else {
                         0
                     },
                 ),
-                Masks::AboveNoise(_) => (LitMask::above_noise(&img, opts.deep_relative), 0),
+                Masks::AboveNoise(_) => (LitMask::above_noise_with(&img, opts.deep_relative, sigma), 0),
             };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress("masks", d, chosen.len());

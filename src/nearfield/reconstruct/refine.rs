@@ -569,7 +569,8 @@ fn snap_outline(
 /// parts sample a grid over it (0.1 unit, 3 units beyond it) as luminance over their mean
 /// (`means`); the median over cameras at each point is the part's map. Its light is the region
 /// connected to the map's largest value where some camera sees at least [`SMALL_PART_FLOOR`] of
-/// the largest value any sees (a lower camera's pixels reach further across the plane); a part
+/// the largest value any sees and six times its own noise (a lower camera's pixels reach further
+/// across the plane; the noise from the samples in the grid's outer unit); a part
 /// whose light reaches the grid's border is not isolated and stays as it is. The outline is where
 /// the map falls to half its largest value, looked for along rays from the light's centroid, a
 /// polygon of as many corners as the simplification keeps
@@ -685,13 +686,28 @@ fn small_parts(
             if top <= 0.0 {
                 return None;
             }
-            // The light: where some camera sees it above the floor, connected to the largest value
+            // The light: where some camera sees it above its floor, connected to the largest value
             // (a camera's pixels reach further across the plane the lower it looks: the median's
-            // region would cut the light of the lowest).
-            let reach: Vec<f64> = (0..n * n)
-                .map(|g| vals.iter().map(|c| c[g]).fold(0.0, f64::max))
+            // region would cut the light of the lowest). A camera's floor is SMALL_PART_FLOOR of
+            // the largest value any camera sees, or six times its noise where that is more: the
+            // median magnitude of its samples in the grid's outer unit (at least 2 units from the
+            // part) over that of a half-normal distribution; 0 in a noise-free image.
+            let most = vals.iter().flatten().copied().fold(0.0, f64::max);
+            let edge = 10.min(n / 4);
+            let outer = |g: usize| {
+                let (x, y) = (g % n, g / n);
+                x < edge || y < edge || x >= n - edge || y >= n - edge
+            };
+            let floors: Vec<f64> = vals
+                .iter()
+                .map(|c| {
+                    let mut ring: Vec<f64> = (0..n * n).filter(|&g| outer(g)).map(|g| c[g].abs()).collect();
+                    ring.sort_by(f64::total_cmp);
+                    let sigma = ring.get(ring.len() / 2).map_or(0.0, |m| m / 0.674_49);
+                    (SMALL_PART_FLOOR * most).max(f64::from(super::mask::NOISE_SIGMAS) * sigma)
+                })
                 .collect();
-            let most = reach.iter().copied().fold(0.0, f64::max);
+            let reach = |g: usize| vals.iter().zip(&floors).any(|(c, f)| c[g] >= *f);
             let mut light = vec![false; n * n];
             let mut stack = vec![top_g];
             light[top_g] = true;
@@ -701,7 +717,7 @@ fn small_parts(
                     return None;
                 }
                 for q in [g - 1, g + 1, g - n, g + n] {
-                    if !light[q] && reach[q] >= SMALL_PART_FLOOR * most {
+                    if !light[q] && reach(q) {
                         light[q] = true;
                         stack.push(q);
                     }
