@@ -12,7 +12,8 @@
 //! 1. **Cameras**: up to [`ReconstructOptions::max_cameras`], spread evenly over the directions of
 //!    the scan's cameras (the one nearest each point of a Fibonacci sphere).
 //! 2. **Masks** ([`mask`]): each image's lit pixels (at or above
-//!    [`ReconstructOptions::lit_relative`] of its own maximum), kept as runs per row plus a coarse
+//!    [`ReconstructOptions::lit_relative`] of its own maximum and above its noise,
+//!    [`LitMask::above_noise`]), kept as runs per row plus a coarse
 //!    distance map. Cameras whose brightest pixel is below [`ReconstructOptions::camera_relative`]
 //!    of the brightest camera's see the back of the source or nothing: every pixel of theirs counts
 //!    as dark, unless they lie on the lit side (within 90° of the mean direction of the cameras
@@ -77,7 +78,8 @@ pub struct ReconstructOptions {
     pub max_cameras: usize,
     /// Most cells per axis of the finest carving level (rounded down to 8·2ᵏ); default 256.
     pub max_cells: usize,
-    /// A pixel is lit at or above this fraction of its image's maximum; default 1e-4.
+    /// A pixel is lit at or above this fraction of its image's maximum (and above the image's
+    /// noise, [`LitMask::above_noise`]); default 1e-4.
     pub lit_relative: f32,
     /// A camera is used when its maximum is at least this fraction of the brightest camera's;
     /// default 1e-6.
