@@ -800,7 +800,7 @@ fn small_parts(
         .collect()
 }
 
-/// The floor (a fraction of the largest value) of a small part's light in [`small_parts`].
+/// The floor (a fraction of the largest value) of a small part's light in `small_parts`.
 pub const SMALL_PART_FLOOR: f64 = 0.001;
 
 /// Where a profile across an edge against darkness (`profile` at the offsets `ts`, from 3 units
