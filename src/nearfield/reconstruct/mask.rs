@@ -53,16 +53,11 @@ impl LitMask {
     /// [`noise_sigma`] gives it).
     pub fn above_noise_with(img: &LuminanceImage, relative: f32, sigma: f32) -> Option<Self> {
         let max = largest(img);
-        Self::above(img, max, (relative * max).max(NOISE_SIGMAS * sigma))
+        Self::above(img, max, noise_floor(max, relative, sigma))
     }
 
-    /// How many pixels `LitMask::above_noise(img, relative)` lights (`None` as it gives), without
-    /// making the mask.
-    pub fn count_above_noise(img: &LuminanceImage, relative: f32) -> Option<u64> {
-        Self::count_above_noise_with(img, relative, noise_sigma(img))
-    }
-
-    /// [`Self::count_above_noise`] with the image's noise given, as for [`Self::above_noise_with`].
+    /// How many pixels [`Self::above_noise_with`] lights (`None` as it gives), without making the
+    /// mask.
     pub fn count_above_noise_with(img: &LuminanceImage, relative: f32, sigma: f32) -> Option<u64> {
         if img.width > u32::from(u16::MAX) {
             return None;
@@ -71,7 +66,7 @@ impl LitMask {
         if max <= 0.0 {
             return Some(0);
         }
-        let floor = (relative * max).max(NOISE_SIGMAS * sigma).max(f32::MIN_POSITIVE);
+        let floor = noise_floor(max, relative, sigma).max(f32::MIN_POSITIVE);
         Some(img.data.iter().filter(|v| **v >= floor).count() as u64)
     }
 
@@ -253,8 +248,12 @@ impl LitMask {
     }
 }
 
-/// Chessboard distance (saturating at 255) from each cell to the nearest `true` cell; all 255 when
-/// there is none. Two passes with the 8-neighbourhood (exact for the chessboard metric).
+/// The floor of [`LitMask::above_noise_with`]: `relative · max`, or [`NOISE_SIGMAS`] · `sigma` where
+/// that is more.
+fn noise_floor(max: f32, relative: f32, sigma: f32) -> f32 {
+    (relative * max).max(NOISE_SIGMAS * sigma)
+}
+
 /// `img`'s largest finite value (cd/m²), 0 when none is positive.
 fn largest(img: &LuminanceImage) -> f32 {
     img.data
@@ -317,6 +316,8 @@ fn median(v: &mut [f32]) -> f32 {
     *v.select_nth_unstable_by(k, f32::total_cmp).1
 }
 
+/// Chessboard distance (saturating at 255) from each cell to the nearest `true` cell; all 255 when
+/// there is none. Two passes with the 8-neighbourhood (exact for the chessboard metric).
 fn chessboard(lit: &[bool], w: usize, h: usize) -> Vec<u8> {
     let mut d: Vec<u8> = lit.iter().map(|&l| if l { 0 } else { 255 }).collect();
     let at = |x: usize, y: usize| y * w + x;
@@ -523,7 +524,7 @@ mod tests {
             let img = spot_on_background(sigma, clip);
             for relative in [1e-7, 1e-4, 0.5] {
                 let m = LitMask::above_noise(&img, relative).unwrap();
-                let n = LitMask::count_above_noise(&img, relative).unwrap();
+                let n = LitMask::count_above_noise_with(&img, relative, noise_sigma(&img)).unwrap();
                 assert_eq!(n, m.lit_pixels, "sigma {sigma} clip {clip} relative {relative}");
             }
         }
@@ -532,7 +533,7 @@ mod tests {
             height: 2,
             data: vec![0.0; 8],
         };
-        assert_eq!(LitMask::count_above_noise(&dark, 1e-7), Some(0));
+        assert_eq!(LitMask::count_above_noise_with(&dark, 1e-7, 0.0), Some(0));
     }
 
     #[test]

@@ -724,7 +724,12 @@ fn neighbours(mesh: &Mesh) -> Vec<Vec<u32>> {
 /// The connected component (sharing vertices along triangles) of every vertex, as the index of one
 /// of its vertices.
 pub fn components(mesh: &Mesh) -> Vec<u32> {
-    let n = mesh.vertices.len();
+    components_of(mesh.vertices.len(), &mesh.triangles)
+}
+
+/// [`components`] of the triangles `triangles` over `n` vertices (a vertex no triangle uses is its
+/// own component).
+pub fn components_of<'a>(n: usize, triangles: impl IntoIterator<Item = &'a [u32; 3]>) -> Vec<u32> {
     let mut parent: Vec<u32> = (0..n as u32).collect();
     fn root(parent: &mut [u32], mut x: u32) -> u32 {
         while parent[x as usize] != x {
@@ -734,7 +739,7 @@ pub fn components(mesh: &Mesh) -> Vec<u32> {
         }
         x
     }
-    for t in &mesh.triangles {
+    for t in triangles {
         for k in 1..3 {
             let (a, b) = (root(&mut parent, t[0]), root(&mut parent, t[k]));
             if a != b {

@@ -348,7 +348,7 @@ pub type Progress<'a> = &'a (dyn Fn(&str, usize, usize) + Sync);
 /// (`image(i)` gives camera i's luminance in cd/m²).
 ///
 /// Errors: invalid options, an image error (as `image` reports it, naming the image), or a scan in
-/// which no camera saw light ([`NearfieldError::InvalidArgument`] on `scan`).
+/// which no camera saw light above its noise ([`NearfieldError::InvalidArgument`] on `scan`).
 pub fn reconstruct(
     set: &RayImageSet,
     image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
@@ -358,12 +358,6 @@ pub fn reconstruct(
     opts.validate()?;
     let deep = opts.deep_relative < opts.lit_relative;
     let (first, deep_lit_pixels) = reconstruct_with(set, image, opts, Masks::Relative { count_deep: deep }, progress)?;
-    let Some(first) = first else {
-        return Err(NearfieldError::invalid(
-            "scan",
-            "no camera read sees any light: nothing to reconstruct",
-        ));
-    };
     if !deep {
         return Ok(first);
     }
@@ -380,9 +374,7 @@ pub fn reconstruct(
         return Ok(first);
     }
     let first_s = first.report.seconds;
-    let (Some(deep), _) = reconstruct_with(set, image, opts, Masks::AboveNoise(more_than), progress)? else {
-        return Ok(first);
-    };
+    let (deep, _) = reconstruct_with(set, image, opts, Masks::AboveNoise, progress)?;
     let deep_s = deep.report.seconds;
     // Taken when it explains more of the light, or (the first explaining enough of its own) when
     // it explains enough of its larger share.
@@ -403,9 +395,8 @@ enum Masks {
     /// image whose noise lies below that); with `count_deep`, the pixels
     /// [`Self::AboveNoise`]'s masks would light are counted too.
     Relative { count_deep: bool },
-    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`], carved only when the
-    /// carving cameras' masks hold more lit pixels than given.
-    AboveNoise(f64),
+    /// [`LitMask::above_noise`] at [`ReconstructOptions::deep_relative`].
+    AboveNoise,
 }
 
 /// When the first masks' mesh explains too little of the light, the masks made above the noise are
@@ -423,17 +414,19 @@ pub const DEEP_TRIGGER_GAIN: f64 = 0.1;
 /// than the first's coverage minus this.
 pub const DEEP_COVERAGE_SLACK: f64 = 0.02;
 
-/// [`reconstruct`] with one kind of masks; `None` when the masks above the noise add nothing.
-/// Also: the pixels the masks above the noise would light in the cameras that would carve with
-/// them (counted with `Masks::Relative { count_deep: true }`, else 0), which decides whether they
-/// add anything without reading the images again.
+/// [`reconstruct`] with one kind of masks. Also: the pixels the masks above the noise would light
+/// in the cameras that would carve with them (counted with `Masks::Relative { count_deep: true }`,
+/// else 0), which decides whether they add anything without reading the images again.
+///
+/// Errors: as [`reconstruct`]; a scan in which no camera read sees light, or whose masks light no
+/// pixel of a camera that carves (every image's light within its noise).
 fn reconstruct_with(
     set: &RayImageSet,
     image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
     opts: &ReconstructOptions,
     masks_kind: Masks,
     progress: Progress,
-) -> Result<(Option<Reconstruction>, u64)> {
+) -> Result<(Reconstruction, u64)> {
     let t0 = Instant::now();
     let chosen = spread_cameras(set, opts.max_cameras);
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -451,7 +444,7 @@ fn reconstruct_with(
                         0
                     },
                 ),
-                Masks::AboveNoise(_) => (LitMask::above_noise_with(&img, opts.deep_relative, sigma), 0),
+                Masks::AboveNoise => (LitMask::above_noise_with(&img, opts.deep_relative, sigma), 0),
             };
             let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
             progress("masks", d, chosen.len());
@@ -460,9 +453,9 @@ fn reconstruct_with(
         .collect::<Result<Vec<_>>>()?
         .into_iter()
         .unzip();
-    let (lit_relative, more_than) = match masks_kind {
-        Masks::Relative { .. } => (opts.lit_relative, 0.0),
-        Masks::AboveNoise(more_than) => (opts.deep_relative, more_than),
+    let lit_relative = match masks_kind {
+        Masks::Relative { .. } => opts.lit_relative,
+        Masks::AboveNoise => opts.deep_relative,
     };
     let noise_floored = masks
         .iter()
@@ -542,8 +535,11 @@ fn reconstruct_with(
     // Lit pixels of the cameras that carve (a camera that sees no light counts none, whatever its
     // noise lit).
     let lit_pixels: u64 = views.iter().map(|v| v.mask.lit_pixels).sum();
-    if lit_pixels as f64 <= more_than {
-        return Ok((None, deep_lit_pixels));
+    if lit_pixels == 0 {
+        return Err(NearfieldError::invalid(
+            "scan",
+            "no camera read sees any light above its noise: nothing to reconstruct",
+        ));
     }
     let content = (content * 1.02).min(set.sphere.radius_m * 0.999);
     let mask_bytes = views.iter().map(|v| v.mask.bytes()).sum();
@@ -706,11 +702,11 @@ fn reconstruct_with(
         ],
     };
     Ok((
-        Some(Reconstruction {
+        Reconstruction {
             mesh,
             occupancy,
             report,
-        }),
+        },
         deep_lit_pixels,
     ))
 }

@@ -53,7 +53,7 @@
 use glam::{DMat3, DVec3};
 use rayon::prelude::*;
 
-use super::mesh::{components, members, Mesh};
+use super::mesh::{components, components_of, members, Mesh};
 use crate::nearfield::bvh::ProxyBvh;
 use crate::nearfield::rayset::{Camera, Intrinsics, LuminanceImage};
 
@@ -598,31 +598,13 @@ fn small_parts(
     let Some(&first) = tris.first() else {
         return Vec::new();
     };
-    // Connected groups (union-find over the triangles' corners).
-    let mut parent: Vec<u32> = (0..mesh.vertices.len() as u32).collect();
-    fn find(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
-    for &k in &tris {
-        let t = mesh.triangles[k];
-        let a = find(&mut parent, t[0]);
-        for &v in &t[1..] {
-            let b = find(&mut parent, v);
-            if a != b {
-                parent[b as usize] = a;
-            }
-        }
-    }
+    // Connected groups of those triangles.
+    let comp = components_of(mesh.vertices.len(), tris.iter().map(|&k| &mesh.triangles[k]));
     let mut groups: std::collections::BTreeMap<u32, Vec<usize>> = std::collections::BTreeMap::new();
     for &k in &tris {
-        let root = find(&mut parent, mesh.triangles[k][0]);
-        groups.entry(root).or_default().push(k);
+        groups.entry(comp[mesh.triangles[k][0] as usize]).or_default().push(k);
     }
-    drop(parent);
+    drop(comp);
     let p0 = mesh.vertices[mesh.triangles[first][0] as usize];
     let e1 = normal.any_orthonormal_vector();
     let e2 = normal.cross(e1);
