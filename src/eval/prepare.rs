@@ -184,7 +184,25 @@ pub(super) fn reconstructed_proxy(p: &Prepared, progress: &dyn Fn(&str)) -> Resu
         source: Box::new(source),
     };
     let mut warnings = Vec::new();
-    let rec = crate::nearfield::reconstruct::scan_proxy(&scan, p.lum.name(), &|_, _, _| {}, &mut warnings)?;
+    // The refinement reads the captures themselves where they are finer, cut to windows (rendered
+    // as a sensor integrates, as the coarser ones are).
+    let captures = p.pack.rayset();
+    let window = |i: usize, crop: [u32; 4]| {
+        let k = crate::nearfield::reconstruct::window_intrinsics(captures.intrinsics_of(i), crop);
+        crate::nearfield::synth::render_pinhole(
+            p.lum.as_ref(),
+            &captures.cameras[i],
+            &k,
+            crate::nearfield::reconstruct::CAPTURE_SUPERSAMPLE,
+        )
+    };
+    let finer = captures.intrinsics_of(0).width > scan.set.intrinsics_of(0).width;
+    let fine = finer.then_some(crate::nearfield::reconstruct::FineImages {
+        set: captures,
+        window: &window,
+    });
+    let rec =
+        crate::nearfield::reconstruct::scan_proxy_refined(&scan, fine, p.lum.name(), &|_, _, _| {}, &mut warnings)?;
     if let Some(r) = &rec {
         let rep = &r.report;
         warnings.push(format!(

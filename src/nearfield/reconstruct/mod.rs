@@ -307,9 +307,23 @@ pub fn scan_proxy(
     progress: Progress,
     warnings: &mut Vec<String>,
 ) -> Result<Option<Reconstruction>> {
-    let rec = match reconstruct(
+    scan_proxy_refined(scan, None, what, progress, warnings)
+}
+
+/// [`scan_proxy`], refining from `fine` images where given ([`reconstruct_refined`]).
+///
+/// Errors: as [`scan_proxy`].
+pub fn scan_proxy_refined(
+    scan: &Scan,
+    fine: Option<FineImages>,
+    what: &str,
+    progress: Progress,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Reconstruction>> {
+    let rec = match reconstruct_refined(
         &scan.set,
         &|i| scan.source.image(i),
+        fine,
         &ReconstructOptions::default(),
         progress,
     ) {
@@ -355,9 +369,50 @@ pub fn reconstruct(
     opts: &ReconstructOptions,
     progress: Progress,
 ) -> Result<Reconstruction> {
+    reconstruct_refined(set, image, None, opts, progress)
+}
+
+/// The images the refinement reads when they differ from the ones carved: the same cameras, in the
+/// same order, at a finer resolution. A synthetic scan's reconstruction carves its captures
+/// rendered again at most 256 px across (as a sensor integrates; `eval --reconstructed-proxy`) and
+/// refines from them at the captures' own resolution, as a real scan's reconstruction reads its
+/// images: a 1 mm strip is 0.65 of a 1.54 mm pixel, and no image that coarse says how wide it is.
+#[derive(Clone, Copy)]
+pub struct FineImages<'a> {
+    /// The cameras (the carved set's poses, in its order) with the fine intrinsics.
+    pub set: &'a RayImageSet,
+    /// Camera `i`'s image cut to columns `[c0, c1)` and rows `[r0, r1)` (`[c0, c1, r0, r1]`),
+    /// luminance in cd/m².
+    pub window: &'a (dyn Fn(usize, [u32; 4]) -> Result<LuminanceImage> + Sync),
+}
+
+/// [`reconstruct`], refining from `fine` images where given.
+///
+/// Errors: as [`reconstruct`]; `fine` with other cameras than `set`'s
+/// ([`NearfieldError::InvalidArgument`] on `fine`).
+pub fn reconstruct_refined(
+    set: &RayImageSet,
+    image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
+    fine: Option<FineImages>,
+    opts: &ReconstructOptions,
+    progress: Progress,
+) -> Result<Reconstruction> {
     opts.validate()?;
+    if let Some(f) = fine {
+        let same = |a: &crate::nearfield::rayset::Camera, b: &crate::nearfield::rayset::Camera| {
+            a.position_m == b.position_m && a.to_camera(glam::DVec3::X) == b.to_camera(glam::DVec3::X)
+        };
+        if f.set.cameras.len() != set.cameras.len() || !f.set.cameras.iter().zip(&set.cameras).all(|(a, b)| same(a, b))
+        {
+            return Err(NearfieldError::invalid(
+                "fine",
+                "the fine images' cameras are not the scan's",
+            ));
+        }
+    }
     let deep = opts.deep_relative < opts.lit_relative;
-    let (first, deep_lit_pixels) = reconstruct_with(set, image, opts, Masks::Relative { count_deep: deep }, progress)?;
+    let (first, deep_lit_pixels) =
+        reconstruct_with(set, image, fine, opts, Masks::Relative { count_deep: deep }, progress)?;
     if !deep {
         return Ok(first);
     }
@@ -374,7 +429,7 @@ pub fn reconstruct(
         return Ok(first);
     }
     let first_s = first.report.seconds;
-    let (deep, _) = reconstruct_with(set, image, opts, Masks::AboveNoise, progress)?;
+    let (deep, _) = reconstruct_with(set, image, fine, opts, Masks::AboveNoise, progress)?;
     let deep_s = deep.report.seconds;
     // Taken when it explains more of the light, or (the first explaining enough of its own) when
     // it explains enough of its larger share.
@@ -423,6 +478,7 @@ pub const DEEP_COVERAGE_SLACK: f64 = 0.02;
 fn reconstruct_with(
     set: &RayImageSet,
     image: &(dyn Fn(usize) -> Result<LuminanceImage> + Sync),
+    fine: Option<FineImages>,
     opts: &ReconstructOptions,
     masks_kind: Masks,
     progress: Progress,
@@ -623,11 +679,12 @@ fn reconstruct_with(
             min: lo - DVec3::splat(reach),
             max: hi + DVec3::splat(reach),
         };
+        let refine_set = fine.map_or(set, |f| f.set);
         let mut held = 0usize;
         let picks: Vec<(usize, [u32; 4])> = carve::spread_order(chosen.len())
             .into_iter()
             .map(|k| chosen[k])
-            .map(|i| (i, box_crop(set, i, &bounds)))
+            .map(|i| (i, box_crop(refine_set, i, &bounds)))
             .take_while(|(_, [c0, c1, r0, r1])| {
                 held += (c1 - c0) as usize * (r1 - r0) as usize;
                 held <= REFINE_PIXELS
@@ -641,13 +698,19 @@ fn reconstruct_with(
             order
                 .into_iter()
                 .take(16)
-                .map(|k| (chosen[k], box_crop(set, chosen[k], &bounds)))
+                .map(|k| (chosen[k], box_crop(refine_set, chosen[k], &bounds)))
                 .collect()
         };
         let shots: Vec<refine::Shot> = picks
             .par_iter()
             .map(|&(i, crop)| {
-                let (intrinsics, image) = cropped(set.intrinsics_of(i), &image(i)?, crop);
+                let (intrinsics, image) = match fine {
+                    Some(f) => {
+                        let img = (f.window)(i, crop)?;
+                        (window_intrinsics(f.set.intrinsics_of(i), crop), img)
+                    }
+                    None => cropped(set.intrinsics_of(i), &image(i)?, crop),
+                };
                 Ok(refine::Shot {
                     camera: set.cameras[i].clone(),
                     intrinsics,
@@ -737,13 +800,17 @@ fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> 
         let dst = ((r - r0) * out.width) as usize..((r - r0 + 1) * out.width) as usize;
         out.data[dst].copy_from_slice(&img.data[src]);
     }
-    let k = Intrinsics {
-        width: out.width,
-        height: out.height,
+    (window_intrinsics(k, [c0, c1, r0, r1]), out)
+}
+
+/// The intrinsics of the image `k` takes, cut to `[c0, c1) × [r0, r1)` (inside the image).
+pub fn window_intrinsics(k: &Intrinsics, [c0, c1, r0, r1]: [u32; 4]) -> Intrinsics {
+    Intrinsics {
+        width: c1 - c0,
+        height: r1 - r0,
         principal_px: k.principal_px - glam::DVec2::new(f64::from(c0), f64::from(r0)),
         focal_px: k.focal_px,
-    };
-    (k, out)
+    }
 }
 
 /// Cameras read again for [`refine`], at most ...

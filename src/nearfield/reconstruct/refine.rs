@@ -14,6 +14,11 @@
 //!   span at least [`MIN_SPAN_CELLS`] cells; only its inliers are moved. The parts that are not
 //!   flat on their own are then tried once more together, as one part (coplanar small features:
 //!   led-dots' 3 mm dots are 3 units across); what is still not flat is left as it is.
+//! - A part whose inliers make a line (spread at most [`LINE_WIDTH_UNITS`] across their longest
+//!   axis in both other directions: a 1 mm strip carves to a lens about as thick as it is wide,
+//!   and its least-squares plane stands on edge) takes its normal from the light instead
+//!   (`light_normal`): across the axis, the light-weighted mean direction to the cameras that see
+//!   it lit, or where that cancels (lit on both sides) the direction of the most light.
 //! - For a flat part, the plane is moved along its normal by the offset in ±[`SEARCH_CELLS`] cells
 //!   that minimises the luminance disagreement of the cameras that see it at least
 //!   [`MIN_ELEVATION_DEG`] above its plane: points of the part (its vertices on the plane, up to
@@ -40,6 +45,15 @@
 //!   along the half-light outline of the cameras' median map, scaled to the area the cameras' light
 //!   gives (each camera's light over the part divided by its largest value, the median over
 //!   cameras), on both sheets.
+//! - A line part is redrawn whole as a flat band instead (`line_part`): slices
+//!   [`LINE_SLICE_UNITS`] apart, each between the half-light points of the cameras' median across
+//!   it, its width scaled as a small part's area, averaged over [`LINE_SMOOTHING_SLICES`]
+//!   neighbours; runs broken where the light falls below half (a gap), ended at the half-light
+//!   points along the middle. The band's plane is first moved, tilted along the axis and rolled
+//!   about it to where the cameras agree best at its edges (`line_depth`): the light gives the
+//!   normal to a few degrees only, and a view 10° above a 1 mm strip's plane drawn 0.1 mm deep
+//!   draws the strip half off itself. The band's edges are only as good as the images: a strip
+//!   narrower than their pixels comes out a pixel wide (docs/proxy.md, known limits).
 //! - A camera counts for a point only when the other parts of the mesh do not hide the point from
 //!   it (`Sight`): a tile in front of a back plane shows the cameras it hides the plane from its
 //!   own light, which is no evidence about the plane.
@@ -199,15 +213,12 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
             .map(|(_, t)| *t)
             .collect();
         for r in &redraws {
-            let c = vertices.len() as u32;
-            vertices.push(r.centre);
-            vertices.extend(&r.ring);
-            let n = r.ring.len() as u32;
-            for k in 0..n {
-                let (a, b) = (c + 1 + k, c + 1 + (k + 1) % n);
+            let base = vertices.len() as u32;
+            vertices.extend(&r.vertices);
+            for [a, b, c] in &r.faces {
                 // Both sheets, as every flat part has.
-                triangles.push([c, a, b]);
-                triangles.push([c, b, a]);
+                triangles.push([base + a, base + b, base + c]);
+                triangles.push([base + a, base + c, base + b]);
             }
         }
         *mesh = super::mesh::compacted(&vertices, triangles);
@@ -220,12 +231,27 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
 /// flattened it folds over itself, so its outline cannot be followed vertex by vertex.
 pub const SMALL_PART_UNITS: f64 = 8.0;
 
-/// A small part redrawn: the triangles it replaces (indices into the mesh's triangles) and the
-/// polygon that replaces them (a centre and an outline ring on the plane, m).
+/// A part redrawn: the triangles it replaces (indices into the mesh's triangles) and the
+/// polygon that replaces them on the plane: its vertices (m) and triangles (indices into them, one
+/// sheet; both are drawn).
 struct Redraw {
     triangles: Vec<usize>,
-    centre: DVec3,
-    ring: Vec<DVec3>,
+    vertices: Vec<DVec3>,
+    faces: Vec<[u32; 3]>,
+}
+
+impl Redraw {
+    /// A star-shaped polygon: a fan from `centre` over `ring`.
+    fn fan(triangles: Vec<usize>, centre: DVec3, ring: &[DVec3]) -> Self {
+        let n = ring.len() as u32;
+        let mut vertices = vec![centre];
+        vertices.extend(ring);
+        Self {
+            triangles,
+            vertices,
+            faces: (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect(),
+        }
+    }
 }
 
 /// [`refine_flat_parts`] for one part: the vertices `part` of the connected components `ids`
@@ -258,9 +284,27 @@ fn fit_part(
     if (inliers.len() as f64) < MIN_INLIERS * all.len() as f64 {
         return None;
     }
-    let idx: Vec<usize> = inliers.iter().map(|&k| idx[k]).collect();
-    let pts: Vec<DVec3> = inliers.iter().map(|&k| all[k]).collect();
-    let (centre, normal, spread) = plane_of(&pts)?;
+    let mut idx: Vec<usize> = inliers.iter().map(|&k| idx[k]).collect();
+    let mut pts: Vec<DVec3> = inliers.iter().map(|&k| all[k]).collect();
+    let (centre, mut normal, spread) = plane_of(&pts)?;
+    // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
+    // back plane): those cameras see other light there and do not vote.
+    let sight = Sight::without(mesh, comp, ids, voxel_m);
+    // A part that is a line (a 1 mm strip carves to a lens about as thick as it is wide) has no
+    // plane of its own: the cameras' light says which way it faces.
+    let mut line = None;
+    if let Some(axis) = line_axis(&pts, voxel_m) {
+        if let Some(n) = light_normal(&pts, centre, axis, shots, &sight) {
+            normal = n;
+            line = Some(axis);
+            let inliers = near(centre, normal);
+            if (inliers.len() as f64) < MIN_INLIERS * all.len() as f64 {
+                return None;
+            }
+            idx = inliers.iter().map(|&k| part[k]).collect();
+            pts = inliers.iter().map(|&k| all[k]).collect();
+        }
+    }
     let dist: Vec<f64> = pts.iter().map(|p| (*p - centre).dot(normal)).collect();
     let rms = (dist.iter().map(|d| d * d).sum::<f64>() / dist.len() as f64).sqrt();
     if rms > FLAT_RMS_CELLS * voxel_m || spread < MIN_SPAN_CELLS * voxel_m {
@@ -280,9 +324,6 @@ fn fit_part(
             (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
         })
         .collect();
-    // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
-    // back plane): those cameras see other light there and do not vote.
-    let sight = Sight::without(mesh, comp, ids, voxel_m);
     let vis = sight.rows(&on_plane, &seeing);
     let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing, &vis);
     for (&i, d) in idx.iter().zip(&dist) {
@@ -319,10 +360,34 @@ fn fit_part(
             .copied()
             .filter(|&i| ((mesh.vertices[i] - centre).dot(normal) - offset_m).abs() < 1e-9 + 1e-6 * voxel_m)
             .collect();
-        snap_outline(mesh, &on, (centre, normal), voxel_m, (&seeing, &sight), &means, &lit);
-        let small = small_parts(mesh, &on, normal, voxel_m, (&seeing, &sight), &means, &lit);
-        redrawn = small.len();
-        redraws.extend(small);
+        if let Some(axis) = line {
+            // A line's flattened lens folds over itself along its whole length, as a small
+            // part's does: it is redrawn whole, as a band.
+            let triangles: Vec<usize> = (0..mesh.triangles.len())
+                .filter(|&k| ids.contains(&comp[mesh.triangles[k][0] as usize]))
+                .collect();
+            let plane = (centre + offset_m * normal, normal);
+            if let Some(band) = line_part(
+                mesh,
+                part,
+                triangles,
+                plane,
+                axis,
+                voxel_m,
+                (&seeing, &sight),
+                &means,
+                &lit,
+                false,
+            ) {
+                redrawn = 1;
+                redraws.push(band);
+            }
+        } else {
+            snap_outline(mesh, &on, (centre, normal), voxel_m, (&seeing, &sight), &means, &lit);
+            let small = small_parts(mesh, &on, normal, voxel_m, (&seeing, &sight), &means, &lit);
+            redrawn = small.len();
+            redraws.extend(small);
+        }
     }
     Some(PlaneFit {
         absorbed,
@@ -774,13 +839,380 @@ fn small_parts(
                 return None;
             }
             let s = (area / poly).sqrt().clamp(0.7, 1.4);
-            Some(Redraw {
-                triangles,
-                centre: to3(c),
-                ring: ring.iter().map(|q| to3(c + s * (*q - c))).collect(),
-            })
+            let ring: Vec<DVec3> = ring.iter().map(|q| to3(c + s * (*q - c))).collect();
+            Some(Redraw::fan(triangles, to3(c), &ring))
         })
         .collect()
+}
+
+/// Slices of a line part (`line_part`) are this many units apart along it.
+pub const LINE_SLICE_UNITS: f64 = 2.0;
+
+/// A line part's slices are averaged with this many neighbours on each side (within a run).
+pub const LINE_SMOOTHING_SLICES: usize = 3;
+
+/// A line part (the vertices `part`, on the plane `(point, normal)`, along `axis`) redrawn as a
+/// band from the images, replacing `triangles`: slices [`LINE_SLICE_UNITS`] apart across it, each
+/// drawn between the half-light points of the median over the cameras (above 30°, clear of the
+/// rest of the mesh) of their luminance over their mean, its width scaled to the width the
+/// cameras' light gives (each camera's light across the slice over its largest value, the median
+/// over cameras; the scale held within 0.7-1.4, as a small part's). A run of slices is broken
+/// where the median's peak falls below half the slices' median peak (a gap); each run's ends are
+/// at the half-light points along its middle. `None` when no slice is seen by 3 cameras.
+#[allow(clippy::too_many_arguments)]
+fn line_part(
+    mesh: &Mesh,
+    part: &[usize],
+    triangles: Vec<usize>,
+    (point, normal): (DVec3, DVec3),
+    axis: DVec3,
+    unit: f64,
+    (shots, sight): (&[&Shot], &Sight),
+    means: &[f64],
+    lit: &[usize],
+    depth_fitted: bool,
+) -> Option<Redraw> {
+    use glam::DVec2;
+    let a = (axis - axis.dot(normal) * normal).normalize_or_zero();
+    if a == DVec3::ZERO {
+        return None;
+    }
+    let b = normal.cross(a);
+    let to2 = |p: DVec3| DVec2::new((p - point).dot(a), (p - point).dot(b));
+    let to3 = |q: DVec2| point + q.x * a + q.y * b;
+    let (lo, hi) = part.iter().map(|&i| to2(mesh.vertices[i])).fold(
+        (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+        |(lo, hi), q| (lo.min(q), hi.max(q)),
+    );
+    // Samples a tenth of a unit apart, or a fifth of the cameras' pixel where their images are
+    // finer than the unit (the median footprint at the part's middle).
+    let mid = to3(0.5 * (lo + hi));
+    let mut px: Vec<f64> = lit
+        .iter()
+        .map(|&j| (shots[j].camera.position_m - mid).length() / shots[j].intrinsics.focal_px.max_element())
+        .collect();
+    px.sort_by(f64::total_cmp);
+    let h = px.get(px.len() / 2).map_or(0.1 * unit, |p| (0.2 * p).min(0.1 * unit));
+    let margin = 3.0 * unit;
+    let (s0, s1) = (lo.y - margin, hi.y + margin);
+    let n = ((s1 - s0) / h).ceil() as usize + 1;
+    let across = |k: usize| s0 + h * k as f64;
+    let cams_at = |p: DVec3| -> Vec<usize> {
+        lit.iter()
+            .copied()
+            .filter(|&j| {
+                let to = shots[j].camera.position_m - p;
+                (to.dot(normal) / to.length()).abs() >= 30f64.to_radians().sin() && sight.clear(p, shots[j])
+            })
+            .collect()
+    };
+    // Each camera's samples along a line of points (a camera that does not see all of them is
+    // left out), and their median.
+    let samples = |cams: &[usize], pts: &[DVec3]| -> Vec<Vec<f64>> {
+        cams.iter()
+            .filter_map(|&j| pts.iter().map(|p| Some(seen(shots[j], *p)? / means[j])).collect())
+            .collect()
+    };
+    let median = |vals: &[Vec<f64>], k: usize| {
+        let mut v: Vec<f64> = vals.iter().map(|c| c[k]).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    /// A slice: along, middle and half width across (m), its median's peak, its cameras.
+    struct Slice {
+        t: f64,
+        mid: f64,
+        half: f64,
+        top: f64,
+        cams: Vec<usize>,
+    }
+    let count = (((hi.x - lo.x) / (LINE_SLICE_UNITS * unit)).round() as usize).max(1);
+    let slices: Vec<Option<Slice>> = (0..count)
+        .into_par_iter()
+        .map(|k| {
+            let t = lo.x + (hi.x - lo.x) * (k as f64 + 0.5) / count as f64;
+            let cams = cams_at(to3(DVec2::new(t, 0.5 * (lo.y + hi.y))));
+            let pts: Vec<DVec3> = (0..n).map(|i| to3(DVec2::new(t, across(i)))).collect();
+            let vals = samples(&cams, &pts);
+            if vals.len() < 3 {
+                return None;
+            }
+            let map: Vec<f64> = (0..n).map(|i| median(&vals, i)).collect();
+            let (top, peak) = map
+                .iter()
+                .enumerate()
+                .fold((0.0, 0), |(m, p), (i, &v)| if v > m { (v, i) } else { (m, p) });
+            if top <= 0.0 {
+                return Some(Slice {
+                    t,
+                    mid: 0.0,
+                    half: 0.0,
+                    top: 0.0,
+                    cams,
+                });
+            }
+            // Half light on each side of the peak (within the margin).
+            let left = (1..=peak).rev().find(|&i| map[i - 1] < 0.5 * top).map(|i| {
+                let (x, y) = (map[i], map[i - 1]);
+                across(i) - h * (x - 0.5 * top) / (x - y)
+            })?;
+            let right = (peak..n - 1).find(|&i| map[i + 1] < 0.5 * top).map(|i| {
+                let (x, y) = (map[i], map[i + 1]);
+                across(i) + h * (x - 0.5 * top) / (x - y)
+            })?;
+            // The light across: where some camera sees it above its floor (as in `small_parts`:
+            // SMALL_PART_FLOOR of the most, or six times the camera's noise from its outer unit
+            // on both sides), connected to the peak.
+            let most = vals.iter().flatten().copied().fold(0.0, f64::max);
+            let edge = 10.min(n / 4);
+            let floors: Vec<f64> = vals
+                .iter()
+                .map(|c| {
+                    let mut ring: Vec<f64> = c[..edge].iter().chain(&c[n - edge..]).map(|v| v.abs()).collect();
+                    ring.sort_by(f64::total_cmp);
+                    let sigma = ring.get(ring.len() / 2).map_or(0.0, |m| m / 0.674_49);
+                    (SMALL_PART_FLOOR * most).max(f64::from(super::mask::NOISE_SIGMAS) * sigma)
+                })
+                .collect();
+            let reach = |i: usize| vals.iter().zip(&floors).any(|(c, f)| c[i] >= *f);
+            let first = (0..=peak).rev().take_while(|&i| reach(i)).last().unwrap_or(peak);
+            let last = (peak..n).take_while(|&i| reach(i)).last().unwrap_or(peak);
+            if first == 0 || last == n - 1 {
+                return None;
+            }
+            let mut widths: Vec<f64> = vals
+                .iter()
+                .filter_map(|c| {
+                    let (sum, most) = c[first..=last]
+                        .iter()
+                        .fold((0.0, 0.0f64), |(s, m), v| (s + v, m.max(*v)));
+                    (most > 0.0).then(|| sum * h / most)
+                })
+                .collect();
+            if widths.len() < 3 {
+                return None;
+            }
+            widths.sort_by(f64::total_cmp);
+            let width = widths[widths.len() / 2];
+            let scale = (width / (right - left)).clamp(0.7, 1.4);
+            Some(Slice {
+                t,
+                mid: 0.5 * (left + right),
+                half: 0.5 * scale * (right - left),
+                top,
+                cams,
+            })
+        })
+        .collect();
+    if !depth_fitted {
+        // The band's edges, where every camera sees half its light when the band is at the
+        // strip's depth: a plane a fraction of a unit off (carving's lens, the fit's tilt along a
+        // 300 mm strip) moves each camera's view of an edge by that over the tangent of its
+        // elevation, and a view 10° above it draws a 1 mm strip 0.1 mm deep half off itself.
+        let edges: Vec<Edge> = slices
+            .iter()
+            .flatten()
+            .filter(|s| s.top > 0.0)
+            .flat_map(|s| {
+                [-1.0, 1.0].map(|side| Edge {
+                    t: s.t,
+                    s: side * s.half,
+                    p: to3(DVec2::new(s.t, s.mid + side * s.half)),
+                })
+            })
+            .collect();
+        if let Some([dz, slope, roll]) = line_depth(&edges, normal, unit, h, (shots, sight), means, lit) {
+            // The plane moved by dz at the middle, tilted by `slope` along the axis and by `roll`
+            // across it (the light gives its facing to a few degrees only).
+            let tm = 0.5 * (lo.x + hi.x);
+            let mut sm: Vec<f64> = slices.iter().flatten().filter(|s| s.top > 0.0).map(|s| s.mid).collect();
+            sm.sort_by(f64::total_cmp);
+            let centre = to3(DVec2::new(tm, sm.get(sm.len() / 2).copied().unwrap_or(0.0)));
+            let axis = (a + slope * normal).normalize();
+            let normal = (normal - slope * a - roll * b).normalize();
+            let point = centre + dz * normal;
+            return line_part(
+                mesh,
+                part,
+                triangles,
+                (point, normal),
+                axis,
+                unit,
+                (shots, sight),
+                means,
+                lit,
+                true,
+            );
+        }
+    }
+    let mut tops: Vec<f64> = slices.iter().flatten().map(|s| s.top).filter(|t| *t > 0.0).collect();
+    if tops.is_empty() {
+        return None;
+    }
+    tops.sort_by(f64::total_cmp);
+    let typical = tops[tops.len() / 2];
+    // Runs of lit slices.
+    let mut runs: Vec<Vec<&Slice>> = Vec::new();
+    let mut open = false;
+    for s in &slices {
+        match s {
+            Some(s) if s.top >= 0.5 * typical => {
+                if !open {
+                    runs.push(Vec::new());
+                    open = true;
+                }
+                if let Some(r) = runs.last_mut() {
+                    r.push(s);
+                }
+            }
+            _ => open = false,
+        }
+    }
+    // Where the light along a run's middle falls to half its typical peak, walking from the
+    // slice `s` by `dir` (at most one slice and the margin).
+    let end = |s: &Slice, dir: f64| -> f64 {
+        let step = 0.5 * h;
+        let reach = 0.5 * LINE_SLICE_UNITS * unit + margin;
+        let k = (reach / step).ceil() as usize;
+        let pts: Vec<DVec3> = (0..=k)
+            .map(|i| to3(DVec2::new(s.t + dir * step * i as f64, s.mid)))
+            .collect();
+        let vals = samples(&s.cams, &pts);
+        if vals.len() < 3 {
+            return s.t + dir * 0.5 * LINE_SLICE_UNITS * unit;
+        }
+        let prof: Vec<f64> = (0..=k).map(|i| median(&vals, i)).collect();
+        let half = 0.5 * typical;
+        (0..k)
+            .find(|&i| prof[i] >= half && prof[i + 1] < half)
+            .map_or(s.t + dir * 0.5 * LINE_SLICE_UNITS * unit, |i| {
+                s.t + dir * step * (i as f64 + (prof[i] - half) / (prof[i] - prof[i + 1]))
+            })
+    };
+    let mut vertices = Vec::new();
+    let mut faces = Vec::new();
+    for run in runs {
+        let (Some(first), Some(last)) = (run.first(), run.last()) else {
+            continue;
+        };
+        // Each slice's middle and width averaged with its neighbours' within LINE_SMOOTHING_SLICES
+        // (in the run): each is the median of a few cameras' half-light points, a hundredth of a
+        // millimetre apart from slice to slice along a straight strip.
+        let smooth: Vec<(f64, f64, f64)> = (0..run.len())
+            .map(|k| {
+                let w = &run[k.saturating_sub(LINE_SMOOTHING_SLICES)..(k + LINE_SMOOTHING_SLICES + 1).min(run.len())];
+                let n = w.len() as f64;
+                (
+                    run[k].t,
+                    w.iter().map(|s| s.mid).sum::<f64>() / n,
+                    w.iter().map(|s| s.half).sum::<f64>() / n,
+                )
+            })
+            .collect();
+        let (f, l) = (smooth[0], smooth[smooth.len() - 1]);
+        let mut stations: Vec<(f64, f64, f64)> = vec![(end(first, -1.0), f.1, f.2)];
+        stations.extend(smooth.iter().copied());
+        stations.push((end(last, 1.0), l.1, l.2));
+        let base = vertices.len() as u32;
+        for &(t, mid, half) in &stations {
+            vertices.push(to3(DVec2::new(t, mid - half)));
+            vertices.push(to3(DVec2::new(t, mid + half)));
+        }
+        for k in 0..stations.len() as u32 - 1 {
+            let (l0, r0, l1, r1) = (base + 2 * k, base + 2 * k + 1, base + 2 * k + 2, base + 2 * k + 3);
+            faces.push([l0, l1, r1]);
+            faces.push([l0, r1, r0]);
+        }
+    }
+    (!faces.is_empty()).then_some(Redraw {
+        triangles,
+        vertices,
+        faces,
+    })
+}
+
+/// The depth of a line part's band, from its edge points `edges` (each with its place along the
+/// axis, m): the offset along `normal` at the middle and the slope along the axis (m per m) that
+/// minimise the cameras' disagreement at the edges (as [`point_disagreement`]), searched within a
+/// unit in steps of `h`, then a tenth of it, the slope within a unit over the half length; `None`
+/// when fewer than 3 cameras decide or the least disagreement is not [`MIN_GAIN`] below the
+/// plane's own.
+fn line_depth(
+    edges: &[Edge],
+    normal: DVec3,
+    unit: f64,
+    h: f64,
+    (shots, sight): (&[&Shot], &Sight),
+    means: &[f64],
+    lit: &[usize],
+) -> Option<[f64; 3]> {
+    if edges.len() < 4 {
+        return None;
+    }
+    let (t0, t1) = edges
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), e| (a.min(e.t), b.max(e.t)));
+    let tm = 0.5 * (t0 + t1);
+    let half = (0.5 * (t1 - t0)).max(unit);
+    let width = edges.iter().map(|e| e.s.abs()).fold(0.0, f64::max).max(h);
+    let vis: Vec<Vec<bool>> = edges.par_iter().map(|e| sight.row(e.p, shots)).collect();
+    let cost = |[dz, slope, roll]: [f64; 3]| -> f64 {
+        edges
+            .par_iter()
+            .zip(&vis)
+            .filter_map(|(e, row)| {
+                point_disagreement(
+                    e.p + (dz + slope * (e.t - tm) + roll * e.s) * normal,
+                    shots,
+                    means,
+                    lit,
+                    row,
+                )
+            })
+            .sum()
+    };
+    let at_zero = cost([0.0; 3]);
+    if at_zero <= 0.0 {
+        return None;
+    }
+    let search = |centre: f64, step: f64, reach: f64, f: &dyn Fn(f64) -> f64| -> f64 {
+        let n = (reach / step).round() as i64;
+        (-n..=n)
+            .map(|k| centre + k as f64 * step)
+            .map(|x| (x, f(x)))
+            .fold(
+                (centre, f64::INFINITY),
+                |best, (x, c)| if c < best.1 { (x, c) } else { best },
+            )
+            .0
+    };
+    // Coordinate descent: the offset, the slope, the roll (within ±30°), then each again finer.
+    let mut x = [0.0; 3];
+    let steps = [h, h / half, 0.5 * h / width];
+    let reach = [unit, unit / half, 30f64.to_radians().tan()];
+    for pass in 0..2 {
+        for k in 0..3 {
+            let (step, span) = if pass == 0 {
+                (steps[k], reach[k])
+            } else {
+                (0.1 * steps[k], 2.0 * steps[k])
+            };
+            x[k] = search(x[k], step, span, &|v| {
+                let mut y = x;
+                y[k] = v;
+                cost(y)
+            });
+        }
+    }
+    (cost(x) < (1.0 - MIN_GAIN) * at_zero).then_some(x)
+}
+
+/// An edge point of a line part's band: along and across its axis from the band's middle (m), and
+/// where it is.
+struct Edge {
+    t: f64,
+    s: f64,
+    p: DVec3,
 }
 
 /// The floor (a fraction of the largest value) of a small part's light in `small_parts`.
@@ -868,6 +1300,66 @@ pub(crate) fn plane_of(pts: &[DVec3]) -> Option<(DVec3, DVec3, f64)> {
     }
     let normal = vectors[lo].normalize_or_zero();
     (normal != DVec3::ZERO && values[hi] > 0.0).then(|| (c, normal, values[hi].sqrt()))
+}
+
+/// A part's points spread at most this far (standard deviation, units) across their longest axis
+/// in both other directions make a line (a strip's lens), whose plane the points do not give.
+pub const LINE_WIDTH_UNITS: f64 = 1.5;
+
+/// The longest principal axis of `pts` when they make a line ([`LINE_WIDTH_UNITS`]); `None`
+/// otherwise.
+fn line_axis(pts: &[DVec3], unit: f64) -> Option<DVec3> {
+    let n = pts.len() as f64;
+    let c = pts.iter().sum::<DVec3>() / n;
+    let mut cov = DMat3::ZERO;
+    for p in pts {
+        let d = *p - c;
+        cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
+    }
+    cov *= 1.0 / n;
+    let (values, vectors) = symmetric_eigen(cov);
+    let mut order = [0, 1, 2];
+    order.sort_by(|a, b| values[*b].total_cmp(&values[*a]));
+    let (long, mid) = (values[order[0]], values[order[1]]);
+    (long.sqrt() >= MIN_SPAN_CELLS * unit && mid.max(0.0).sqrt() <= LINE_WIDTH_UNITS * unit)
+        .then(|| vectors[order[0]].normalize_or_zero())
+        .filter(|a| *a != DVec3::ZERO)
+}
+
+/// The way a line part (points `pts` about `centre`, along `axis`) faces, from the light the
+/// cameras see on it: across the axis, the light-weighted mean of the directions to the cameras
+/// (an emitter lit on one side), or, when those cancel (lit on both sides), the direction of the
+/// most light (a strip narrower than a pixel shows light in proportion to its width seen, |cos|
+/// of the angle from its normal). `None` when fewer than 3 cameras see light on it or the light
+/// favours no direction.
+fn light_normal(pts: &[DVec3], centre: DVec3, axis: DVec3, shots: &[Shot], sight: &Sight) -> Option<DVec3> {
+    let step = (pts.len() / 500).max(1);
+    let pts: Vec<DVec3> = pts.iter().step_by(step).copied().collect();
+    let all: Vec<&Shot> = shots.iter().collect();
+    let vis = sight.rows(&pts, &all);
+    let (means, lit) = camera_means(&pts, &all, &vis)?;
+    let across = |j: usize| {
+        let d = (all[j].camera.position_m - centre).normalize_or_zero();
+        d - d.dot(axis) * axis
+    };
+    let (mut first, mut weight, mut second) = (DVec3::ZERO, 0.0, DMat3::ZERO);
+    for &j in &lit {
+        let d = across(j);
+        first += means[j] * d;
+        weight += means[j] * d.length();
+        second += DMat3::from_cols(d * d.x, d * d.y, d * d.z) * means[j];
+    }
+    if weight <= 0.0 {
+        return None;
+    }
+    if first.length() >= 0.3 * weight {
+        return Some(first.normalize());
+    }
+    let (values, vectors) = symmetric_eigen(second);
+    let mut order = [0, 1, 2];
+    order.sort_by(|a, b| values[*b].total_cmp(&values[*a]));
+    let n = vectors[order[0]] - vectors[order[0]].dot(axis) * axis;
+    (values[order[0]] >= 1.2 * values[order[1]] && n.length() > 0.5).then(|| n.normalize())
 }
 
 /// Eigenvalues and unit eigenvectors of a symmetric 3 × 3 matrix: the values in closed form
