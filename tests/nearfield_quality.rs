@@ -7,7 +7,7 @@
 
 mod gpu_common;
 
-use lumiview::eval::{evaluate, format_table, verdict, EvalConfig, EvalMode, LuminaireReport};
+use lumiview::eval::{evaluate, format_table, reconstructed_verdict, verdict, EvalConfig, EvalMode, LuminaireReport};
 
 fn config(tag: &str, max_capture_px: u32) -> EvalConfig {
     EvalConfig {
@@ -69,16 +69,13 @@ fn check_reconstructed(reports: Vec<LuminaireReport>) {
         let find = |label: &str| rep.modes.iter().find(|m| m.mode == label).cloned();
         let t = find("continuous+proxy").expect("true proxy row");
         let r = find("continuous+rec-proxy").expect("a reconstructed proxy row");
-        let mut as_true = rep.clone();
-        for m in &mut as_true.modes {
-            if m.mode == t.mode {
-                *m = lumiview::eval::ModeReport {
-                    mode: t.mode.clone(),
-                    ..r.clone()
-                };
-            }
-        }
-        check(&as_true);
+        let v = reconstructed_verdict(&rep).unwrap_or_else(|| panic!("{}: no verdict", rep.name));
+        assert!(
+            v.failures.is_empty(),
+            "{} with the reconstructed proxy: {}",
+            rep.name,
+            v.failures.join("; ")
+        );
         for (what, a, b) in [
             ("outside log RMSE", t.outside.log_rmse, r.outside.log_rmse),
             ("outside median", t.outside.median_rel, r.outside.median_rel),

@@ -15,7 +15,8 @@
 //!   ray-cast;
 //! - `evaluate.rs`: [`evaluate`]: the scan loaded, its references, every mode rendered and measured;
 //! - `report.rs`: [`ModeReport`], [`LuminaireReport`], [`format_table`], [`write_triptych`];
-//! - `verdict.rs`: [`verdict`], the contract's thresholds and comparisons on a report;
+//! - `verdict.rs`: [`verdict`], the contract's thresholds and comparisons on a report, and
+//!   [`reconstructed_verdict`] on its reconstructed proxy's row;
 //! - [`metrics`]: the per-view metrics and their aggregates;
 //! - [`rays`], [`rayconv`]: ray files against their far field, and the ray-file convergence harness.
 
@@ -41,7 +42,7 @@ pub use metrics::{aggregate, compare_view, compare_view_with_margin, SetMetrics,
 pub use render::render_view;
 pub(crate) use render::{ortho_intensity, reference_ortho_intensity};
 pub use report::{format_table, write_triptych, LuminaireReport, ModeReport};
-pub use verdict::{verdict, Verdict, NO_THRESHOLD, TIE_FLOOR};
+pub use verdict::{reconstructed_verdict, verdict, Verdict, NO_THRESHOLD, TIE_FLOOR};
 pub use views::{fibonacci, framed_view, View};
 
 use crate::gpu::GpuError;

@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use super::metrics::SetMetrics;
-use super::verdict::{verdict, NO_THRESHOLD};
+use super::verdict::{reconstructed_verdict, verdict, NO_THRESHOLD};
 
 /// Results of one mode on one luminaire.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -136,6 +136,14 @@ pub fn format_table(reports: &[LuminaireReport]) -> String {
             s.push_str(&format!("{:<11} {line}\n", ""));
         } else if rep.name == NO_THRESHOLD {
             s.push_str(&format!("{:<11} no threshold (reported only)\n", ""));
+        }
+        if let Some(v) = reconstructed_verdict(rep) {
+            let line = if v.failures.is_empty() {
+                "contract met by continuous+rec-proxy".to_string()
+            } else {
+                format!("contract NOT met by continuous+rec-proxy: {}", v.failures.join("; "))
+            };
+            s.push_str(&format!("{:<11} {line}\n", ""));
         }
         if let Some(line) = reconstructed_against_true(rep) {
             s.push_str(&format!("{:<11} {line}\n", ""));

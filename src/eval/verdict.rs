@@ -3,6 +3,7 @@
 //! light, and not worse than `nearest` on any metric ([`verdict`]); ties within [`TIE_FLOOR`].
 
 use super::config::EvalMode;
+use super::evaluate::RECONSTRUCTED_LABEL;
 use super::report::LuminaireReport;
 
 /// Where continuous + proxy and `nearest` both sit at the storage's quantisation (fp16 tiles: 2⁻¹¹
@@ -107,6 +108,25 @@ pub fn verdict(rep: &LuminaireReport) -> Option<Verdict> {
     Some(v)
 }
 
+/// The contract's verdict on the reconstructed proxy's row (`continuous+rec-proxy`, issue 17): the
+/// verdict of `rep` with that row in place of the true proxy's; `None` where either row is missing
+/// or [`verdict`] does not apply.
+pub fn reconstructed_verdict(rep: &LuminaireReport) -> Option<Verdict> {
+    let label = EvalMode::CONTINUOUS_PROXY.label();
+    let rec = rep.modes.iter().find(|m| m.mode == RECONSTRUCTED_LABEL)?.clone();
+    rep.modes.iter().find(|m| m.mode == label)?;
+    let mut as_true = rep.clone();
+    for m in &mut as_true.modes {
+        if m.mode == label {
+            *m = super::report::ModeReport {
+                mode: label.clone(),
+                ..rec.clone()
+            };
+        }
+    }
+    verdict(&as_true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -181,5 +201,22 @@ mod tests {
         assert!(v.failures.iter().any(|f| f.starts_with("inside:")), "{v:?}");
         // The reflector has no thresholds.
         assert!(verdict(&report("reflector", good(), mode("nearest", 1.0, 0.5, 0.05, 1.0))).is_none());
+    }
+
+    #[test]
+    fn the_reconstructed_proxy_is_held_to_the_same_contract() {
+        let nearest = || mode("nearest", 1.0, 0.5, 0.05, 1.0);
+        let good = || mode("continuous+proxy", 0.001, 0.001, 0.001, 1.0);
+        let mut rep = report("strips", good(), nearest());
+        assert!(reconstructed_verdict(&rep).is_none(), "no reconstructed row");
+        // A reconstructed proxy that loses light fails on its own figures, the true proxy's
+        // verdict unchanged.
+        rep.modes.push(mode(RECONSTRUCTED_LABEL, 0.001, 0.001, 0.001, 1.0));
+        rep.modes[2].flux_error = 0.92;
+        let v = reconstructed_verdict(&rep).unwrap();
+        assert!(v.failures.iter().any(|f| f.starts_with("flux error")), "{v:?}");
+        assert_eq!(verdict(&rep).unwrap(), Verdict::default());
+        rep.modes[2].flux_error = 0.001;
+        assert_eq!(reconstructed_verdict(&rep).unwrap(), Verdict::default());
     }
 }
