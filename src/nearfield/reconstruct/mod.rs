@@ -38,7 +38,11 @@
 //!    of its rim ([`mesh::collapse_thin`]).
 //! 5. **Flat parts** ([`refine`]): each part that is flat within a cell (and the parts too small to
 //!    be, together) is put on the plane its cameras' images agree on (luminance consistency), with
-//!    the vertices of a lens in front of it that the cameras see better on the plane.
+//!    the vertices of a lens in front of it that the cameras see better on the plane; small parts
+//!    are redrawn as polygons and lines (a 1 mm strip) as flat bands from the images. The images
+//!    read here are the carved ones, or finer ones of the same cameras where given
+//!    ([`reconstruct_refined`], [`FineImages`]: a synthetic scan carved from captures rendered
+//!    again at 256 px refines from its own captures, as a real scan's reads its images).
 //! 6. **Lean flat parts** ([`simplify`]): only the triangles each flat part's outline needs.
 //! 7. **Check** ([`coverage`]): the fraction of lit pixels whose line of sight meets the carved
 //!    volume; [`scan_proxy`] drops a mesh below [`MIN_COVERAGE`] (a surface proxy would hide the
