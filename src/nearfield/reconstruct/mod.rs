@@ -711,7 +711,17 @@ fn reconstruct_with(
                 let (intrinsics, image) = match fine {
                     Some(f) => {
                         let img = (f.window)(i, crop)?;
-                        (window_intrinsics(f.set.intrinsics_of(i), crop), img)
+                        let k = window_intrinsics(f.set.intrinsics_of(i), crop);
+                        if (img.width, img.height) != (k.width, k.height) {
+                            return Err(NearfieldError::invalid(
+                                "fine",
+                                format!(
+                                    "camera {i}'s window is {}×{} px, asked for {}×{}",
+                                    img.width, img.height, k.width, k.height
+                                ),
+                            ));
+                        }
+                        (k, img)
                     }
                     None => cropped(set.intrinsics_of(i), &image(i)?, crop),
                 };
@@ -807,11 +817,12 @@ fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> 
     (window_intrinsics(k, [c0, c1, r0, r1]), out)
 }
 
-/// The intrinsics of the image `k` takes, cut to `[c0, c1) × [r0, r1)` (inside the image).
+/// The intrinsics of the image `k` takes, cut to `[c0, c1) × [r0, r1)` (at least one pixel each
+/// way).
 pub fn window_intrinsics(k: &Intrinsics, [c0, c1, r0, r1]: [u32; 4]) -> Intrinsics {
     Intrinsics {
-        width: c1 - c0,
-        height: r1 - r0,
+        width: c1.saturating_sub(c0).max(1),
+        height: r1.saturating_sub(r0).max(1),
         principal_px: k.principal_px - glam::DVec2::new(f64::from(c0), f64::from(r0)),
         focal_px: k.focal_px,
     }

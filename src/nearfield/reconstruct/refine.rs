@@ -173,7 +173,8 @@ pub struct PlaneFit {
     pub point_m: DVec3,
     /// The plane's unit normal.
     pub normal: DVec3,
-    /// Small parts of it redrawn from the images ([`SMALL_PART_UNITS`]).
+    /// Small parts of it redrawn from the images ([`SMALL_PART_UNITS`]), or 1 where the part is a
+    /// line redrawn as a band.
     pub redrawn: usize,
 }
 
@@ -200,6 +201,61 @@ pub fn refine_flat_parts(mesh: &mut Mesh, voxel_m: f64, shots: &[Shot]) -> Vec<P
     if rest.len() >= 2 {
         let together: Vec<usize> = rest.iter().flat_map(|id| parts[id].iter().copied()).collect();
         fits.extend(fit_part(mesh, &comp, &rest, &together, voxel_m, shots, &mut redraws));
+    }
+    // Carving can break a strip into pieces, and each piece's band then covers the whole strip:
+    // a band along a longer one (or an equal one drawn earlier) is not drawn.
+    for j in 0..redraws.len() {
+        let Some(b) = redraws[j].line else { continue };
+        let lb = (b.1 - b.0).length();
+        let covered = redraws.iter().enumerate().any(|(i, r)| {
+            r.line.is_some_and(|a| {
+                let la = (a.1 - a.0).length();
+                i != j && !r.faces.is_empty() && (la > lb || (la == lb && i < j)) && band_along(a, b, voxel_m)
+            })
+        });
+        if covered {
+            redraws[j].vertices.clear();
+            redraws[j].faces.clear();
+        }
+    }
+    // Pieces of a strip that were not lines themselves (a few cells long) lie under its band:
+    // whatever lies wholly within a band (a unit beyond its edges and ends, a unit off its plane)
+    // is not drawn.
+    let bands: Vec<(DVec3, DVec3, f64)> = redraws
+        .iter()
+        .filter(|r| !r.faces.is_empty())
+        .filter_map(|r| r.line)
+        .collect();
+    if !bands.is_empty() {
+        let within = |p: DVec3| {
+            bands.iter().any(|&(a0, a1, half)| {
+                let len = (a1 - a0).length();
+                let d = (a1 - a0) / len.max(1e-12);
+                let v = p - a0;
+                let t = v.dot(d);
+                t >= -voxel_m && t <= len + voxel_m && (v - t * d).length() <= half + voxel_m
+            })
+        };
+        let in_bands: std::collections::HashSet<usize> =
+            redraws.iter().flat_map(|r| r.triangles.iter().copied()).collect();
+        let under: Vec<usize> = (0..mesh.triangles.len())
+            .filter(|k| !in_bands.contains(k))
+            .filter(|&k| mesh.triangles[k].iter().all(|&i| within(mesh.vertices[i as usize])))
+            .collect();
+        for r in &mut redraws {
+            if r.line.is_none() && !r.vertices.is_empty() && r.vertices.iter().all(|&p| within(p)) {
+                r.vertices.clear();
+                r.faces.clear();
+            }
+        }
+        if !under.is_empty() {
+            redraws.push(Redraw {
+                triangles: under,
+                vertices: Vec::new(),
+                faces: Vec::new(),
+                line: None,
+            });
+        }
     }
     if !redraws.is_empty() {
         let dropped: std::collections::HashSet<usize> =
@@ -238,6 +294,8 @@ struct Redraw {
     triangles: Vec<usize>,
     vertices: Vec<DVec3>,
     faces: Vec<[u32; 3]>,
+    /// A line's band: the middle of its first and last ends and its largest half width (m).
+    line: Option<(DVec3, DVec3, f64)>,
 }
 
 impl Redraw {
@@ -250,8 +308,32 @@ impl Redraw {
             triangles,
             vertices,
             faces: (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect(),
+            line: None,
         }
     }
+}
+
+/// Whether the band `b` (its ends' middles) lies along the band `a`, within `unit` of its line,
+/// parallel within 2°, over at least half of `b`'s length.
+fn band_along(a: (DVec3, DVec3, f64), b: (DVec3, DVec3, f64), unit: f64) -> bool {
+    let (la, lb) = ((a.1 - a.0).length(), (b.1 - b.0).length());
+    if la <= 0.0 || lb <= 0.0 {
+        return false;
+    }
+    let (da, db) = ((a.1 - a.0) / la, (b.1 - b.0) / lb);
+    if da.dot(db).abs() < 2f64.to_radians().cos() {
+        return false;
+    }
+    let off = |q: DVec3| {
+        let v = q - a.0;
+        (v - v.dot(da) * da).length()
+    };
+    if off(b.0) > unit || off(b.1) > unit {
+        return false;
+    }
+    let (t0, t1) = ((b.0 - a.0).dot(da), (b.1 - a.0).dot(da));
+    let overlap = t0.max(t1).min(la) - t0.min(t1).max(0.0);
+    overlap >= 0.5 * lb
 }
 
 /// [`refine_flat_parts`] for one part: the vertices `part` of the connected components `ids`
@@ -289,12 +371,13 @@ fn fit_part(
     let (centre, mut normal, spread) = plane_of(&pts)?;
     // The rest of the mesh hides parts of this one from some cameras (a tile in front of a
     // back plane): those cameras see other light there and do not vote.
-    let sight = Sight::without(mesh, comp, ids, voxel_m);
+    let mut sight = None;
     // A part that is a line (a 1 mm strip carves to a lens about as thick as it is wide) has no
     // plane of its own: the cameras' light says which way it faces.
     let mut line = None;
     if let Some(axis) = line_axis(&pts, voxel_m) {
-        if let Some(n) = light_normal(&pts, centre, axis, shots, &sight) {
+        let s = sight.insert(Sight::without(mesh, comp, ids, voxel_m));
+        if let Some(n) = light_normal(&pts, centre, axis, shots, s) {
             normal = n;
             line = Some(axis);
             let inliers = near(centre, normal);
@@ -324,6 +407,7 @@ fn fit_part(
             (to.dot(normal) / to.length()).abs() >= MIN_ELEVATION_DEG.to_radians().sin()
         })
         .collect();
+    let sight = sight.unwrap_or_else(|| Sight::without(mesh, comp, ids, voxel_m));
     let vis = sight.rows(&on_plane, &seeing);
     let (offset_m, cost) = best_offset(&on_plane, normal, voxel_m, &seeing, &vis);
     for (&i, d) in idx.iter().zip(&dist) {
@@ -848,6 +932,10 @@ fn small_parts(
 /// Slices of a line part (`line_part`) are this many units apart along it.
 pub const LINE_SLICE_UNITS: f64 = 2.0;
 
+/// Most slices a line part's band is extended by beyond the part at either end (where carving
+/// broke a strip into pieces: 300 mm at 1.5 mm units takes 100).
+pub const MAX_LINE_SLICES: usize = 4096;
+
 /// A line part's slices are averaged with this many neighbours on each side (within a run).
 pub const LINE_SMOOTHING_SLICES: usize = 3;
 
@@ -927,10 +1015,8 @@ fn line_part(
         cams: Vec<usize>,
     }
     let count = (((hi.x - lo.x) / (LINE_SLICE_UNITS * unit)).round() as usize).max(1);
-    let slices: Vec<Option<Slice>> = (0..count)
-        .into_par_iter()
-        .map(|k| {
-            let t = lo.x + (hi.x - lo.x) * (k as f64 + 0.5) / count as f64;
+    let slice_at = |t: f64| -> Option<Slice> {
+        {
             let cams = cams_at(to3(DVec2::new(t, 0.5 * (lo.y + hi.y))));
             let pts: Vec<DVec3> = (0..n).map(|i| to3(DVec2::new(t, across(i)))).collect();
             let vals = samples(&cams, &pts);
@@ -1002,7 +1088,12 @@ fn line_part(
                 top,
                 cams,
             })
-        })
+        }
+    };
+    let step_t = (hi.x - lo.x) / count as f64;
+    let mut slices: Vec<Option<Slice>> = (0..count)
+        .into_par_iter()
+        .map(|k| slice_at(lo.x + step_t * (k as f64 + 0.5)))
         .collect();
     if !depth_fitted {
         // The band's edges, where every camera sees half its light when the band is at the
@@ -1051,6 +1142,34 @@ fn line_part(
     }
     tops.sort_by(f64::total_cmp);
     let typical = tops[tops.len() / 2];
+    // The band goes on beyond the part while the light does: carving can break a strip narrower
+    // than its cells into pieces, and each piece's band then covers the whole strip (the copies
+    // are merged in `refine_flat_parts`), its gaps included.
+    let lit_slice = |s: &Option<Slice>| s.as_ref().is_some_and(|s| s.top >= 0.5 * typical);
+    let extend = |from: f64, dir: f64| -> Vec<Option<Slice>> {
+        let mut more = Vec::new();
+        while more.len() < MAX_LINE_SLICES {
+            let s = slice_at(from + dir * step_t * (more.len() + 1) as f64);
+            if !lit_slice(&s) {
+                break;
+            }
+            more.push(s);
+        }
+        more
+    };
+    let first_t = lo.x + 0.5 * step_t;
+    let last_t = lo.x + step_t * (count as f64 - 0.5);
+    let before = if lit_slice(&slices[0]) {
+        extend(first_t, -1.0)
+    } else {
+        Vec::new()
+    };
+    let after = if slices.last().is_some_and(lit_slice) {
+        extend(last_t, 1.0)
+    } else {
+        Vec::new()
+    };
+    slices = before.into_iter().rev().chain(slices).chain(after).collect();
     // Runs of lit slices.
     let mut runs: Vec<Vec<&Slice>> = Vec::new();
     let mut open = false;
@@ -1091,6 +1210,7 @@ fn line_part(
     };
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
+    let mut ends: Option<(DVec3, DVec3, f64)> = None;
     for run in runs {
         let (Some(first), Some(last)) = (run.first(), run.last()) else {
             continue;
@@ -1113,6 +1233,11 @@ fn line_part(
         let mut stations: Vec<(f64, f64, f64)> = vec![(end(first, -1.0), f.1, f.2)];
         stations.extend(smooth.iter().copied());
         stations.push((end(last, 1.0), l.1, l.2));
+        let at = |s: &(f64, f64, f64)| to3(DVec2::new(s.0, s.1));
+        if let (Some(s0), Some(s1)) = (stations.first(), stations.last()) {
+            let half = stations.iter().map(|s| s.2).fold(ends.map_or(0.0, |e| e.2), f64::max);
+            ends = Some((ends.map_or(at(s0), |e| e.0), at(s1), half));
+        }
         let base = vertices.len() as u32;
         for &(t, mid, half) in &stations {
             vertices.push(to3(DVec2::new(t, mid - half)));
@@ -1128,6 +1253,7 @@ fn line_part(
         triangles,
         vertices,
         faces,
+        line: ends,
     })
 }
 
