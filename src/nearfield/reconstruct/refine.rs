@@ -1406,14 +1406,7 @@ fn step_edge(ts: &[f64], per: &[Vec<Option<f64>>]) -> Option<f64> {
 /// Centroid, unit normal (smallest principal axis) and the standard deviation along the largest
 /// axis of `pts`; `None` for a degenerate set.
 pub(crate) fn plane_of(pts: &[DVec3]) -> Option<(DVec3, DVec3, f64)> {
-    let n = pts.len() as f64;
-    let c = pts.iter().sum::<DVec3>() / n;
-    let mut cov = DMat3::ZERO;
-    for p in pts {
-        let d = *p - c;
-        cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
-    }
-    cov *= 1.0 / n;
+    let (c, cov) = covariance(pts);
     let (values, vectors) = symmetric_eigen(cov);
     let (mut lo, mut hi) = (0, 0);
     for k in 1..3 {
@@ -1435,6 +1428,14 @@ pub const LINE_WIDTH_UNITS: f64 = 1.5;
 /// The longest principal axis of `pts` when they make a line ([`LINE_WIDTH_UNITS`]); `None`
 /// otherwise.
 fn line_axis(pts: &[DVec3], unit: f64) -> Option<DVec3> {
+    let (values, vectors) = eigen_descending(covariance(pts).1);
+    (values[0].sqrt() >= MIN_SPAN_CELLS * unit && values[1].max(0.0).sqrt() <= LINE_WIDTH_UNITS * unit)
+        .then(|| vectors[0].normalize_or_zero())
+        .filter(|a| *a != DVec3::ZERO)
+}
+
+/// Centroid and covariance of `pts` (not empty).
+fn covariance(pts: &[DVec3]) -> (DVec3, DMat3) {
     let n = pts.len() as f64;
     let c = pts.iter().sum::<DVec3>() / n;
     let mut cov = DMat3::ZERO;
@@ -1442,14 +1443,15 @@ fn line_axis(pts: &[DVec3], unit: f64) -> Option<DVec3> {
         let d = *p - c;
         cov += DMat3::from_cols(d * d.x, d * d.y, d * d.z);
     }
-    cov *= 1.0 / n;
-    let (values, vectors) = symmetric_eigen(cov);
+    (c, cov * (1.0 / n))
+}
+
+/// [`symmetric_eigen`] with the values in decreasing order.
+fn eigen_descending(m: DMat3) -> ([f64; 3], [DVec3; 3]) {
+    let (values, vectors) = symmetric_eigen(m);
     let mut order = [0, 1, 2];
     order.sort_by(|a, b| values[*b].total_cmp(&values[*a]));
-    let (long, mid) = (values[order[0]], values[order[1]]);
-    (long.sqrt() >= MIN_SPAN_CELLS * unit && mid.max(0.0).sqrt() <= LINE_WIDTH_UNITS * unit)
-        .then(|| vectors[order[0]].normalize_or_zero())
-        .filter(|a| *a != DVec3::ZERO)
+    (order.map(|k| values[k]), order.map(|k| vectors[k]))
 }
 
 /// The way a line part (points `pts` about `centre`, along `axis`) faces, from the light the
@@ -1481,11 +1483,9 @@ fn light_normal(pts: &[DVec3], centre: DVec3, axis: DVec3, shots: &[Shot], sight
     if first.length() >= 0.3 * weight {
         return Some(first.normalize());
     }
-    let (values, vectors) = symmetric_eigen(second);
-    let mut order = [0, 1, 2];
-    order.sort_by(|a, b| values[*b].total_cmp(&values[*a]));
-    let n = vectors[order[0]] - vectors[order[0]].dot(axis) * axis;
-    (values[order[0]] >= 1.2 * values[order[1]] && n.length() > 0.5).then(|| n.normalize())
+    let (values, vectors) = eigen_descending(second);
+    let n = vectors[0] - vectors[0].dot(axis) * axis;
+    (values[0] >= 1.2 * values[1] && n.length() > 0.5).then(|| n.normalize())
 }
 
 /// Eigenvalues and unit eigenvectors of a symmetric 3 × 3 matrix: the values in closed form
