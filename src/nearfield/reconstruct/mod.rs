@@ -404,7 +404,7 @@ pub fn reconstruct_refined(
     opts.validate()?;
     if let Some(f) = fine {
         let same = |a: &crate::nearfield::rayset::Camera, b: &crate::nearfield::rayset::Camera| {
-            a.position_m == b.position_m && a.to_camera(glam::DVec3::X) == b.to_camera(glam::DVec3::X)
+            (a.position_m, a.right, a.down, a.forward) == (b.position_m, b.right, b.down, b.forward)
         };
         if f.set.cameras.len() != set.cameras.len() || !f.set.cameras.iter().zip(&set.cameras).all(|(a, b)| same(a, b))
         {

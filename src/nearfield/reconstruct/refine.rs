@@ -616,10 +616,9 @@ fn snap_outline(
             // Each camera's own half-light point, their median: the mean of the cameras' profiles
             // is wider than each (they are registered to a fraction of a unit), so across a small
             // part it never reaches the light inside and its half-light point lay outside the edge.
-            let mut halves: Vec<f64> = per.iter().filter_map(|p| half_light(&ts, p)).collect();
+            let halves: Vec<f64> = per.iter().filter_map(|p| half_light(&ts, p)).collect();
             if halves.len() >= 3 {
-                halves.sort_by(f64::total_cmp);
-                return Some((v, (halves[halves.len() / 2], true)));
+                return middle(halves).map(|h| (v, (h, true)));
             }
             half_light(&ts, &l).map(|t| (v, (t, true)))
         })
@@ -805,11 +804,7 @@ fn small_parts(
                 return None;
             }
             let map: Vec<f64> = (0..n * n)
-                .map(|g| {
-                    let mut v: Vec<f64> = vals.iter().map(|c| c[g]).collect();
-                    v.sort_by(f64::total_cmp);
-                    v[v.len() / 2]
-                })
+                .map(|g| middle(vals.iter().map(|c| c[g]).collect()).unwrap_or(0.0))
                 .collect();
             let (top, top_g) = map
                 .iter()
@@ -832,12 +827,7 @@ fn small_parts(
             };
             let floors: Vec<f64> = vals
                 .iter()
-                .map(|c| {
-                    let mut ring: Vec<f64> = (0..n * n).filter(|&g| outer(g)).map(|g| c[g].abs()).collect();
-                    ring.sort_by(f64::total_cmp);
-                    let sigma = ring.get(ring.len() / 2).map_or(0.0, |m| m / 0.674_49);
-                    (SMALL_PART_FLOOR * most).max(f64::from(super::mask::NOISE_SIGMAS) * sigma)
-                })
+                .map(|c| light_floor((0..n * n).filter(|&g| outer(g)).map(|g| c[g]), most))
                 .collect();
             let reach = |g: usize| vals.iter().zip(&floors).any(|(c, f)| c[g] >= *f);
             let mut light = vec![false; n * n];
@@ -855,7 +845,7 @@ fn small_parts(
                     }
                 }
             }
-            let mut areas: Vec<f64> = vals
+            let areas: Vec<f64> = vals
                 .iter()
                 .filter_map(|c| {
                     let (sum, peak) = (0..n * n)
@@ -867,8 +857,7 @@ fn small_parts(
             if areas.len() < 3 {
                 return None;
             }
-            areas.sort_by(f64::total_cmp);
-            let area = areas[areas.len() / 2];
+            let area = middle(areas)?;
             let (sum, weight) = (0..n * n)
                 .filter(|&g| light[g])
                 .fold((DVec2::ZERO, 0.0), |(s, w), g| (s + map[g] * at(g), w + map[g]));
@@ -975,12 +964,11 @@ fn line_part(
     // Samples a tenth of a unit apart, or a fifth of the cameras' pixel where their images are
     // finer than the unit (the median footprint at the part's middle).
     let mid = to3(0.5 * (lo + hi));
-    let mut px: Vec<f64> = lit
+    let px: Vec<f64> = lit
         .iter()
         .map(|&j| (shots[j].camera.position_m - mid).length() / shots[j].intrinsics.focal_px.max_element())
         .collect();
-    px.sort_by(f64::total_cmp);
-    let h = px.get(px.len() / 2).map_or(0.1 * unit, |p| (0.2 * p).min(0.1 * unit));
+    let h = middle(px).map_or(0.1 * unit, |p| (0.2 * p).min(0.1 * unit));
     let margin = 3.0 * unit;
     let (s0, s1) = (lo.y - margin, hi.y + margin);
     let n = ((s1 - s0) / h).ceil() as usize + 1;
@@ -1001,11 +989,7 @@ fn line_part(
             .filter_map(|&j| pts.iter().map(|p| Some(seen(shots[j], *p)? / means[j])).collect())
             .collect()
     };
-    let median = |vals: &[Vec<f64>], k: usize| {
-        let mut v: Vec<f64> = vals.iter().map(|c| c[k]).collect();
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
+    let median = |vals: &[Vec<f64>], k: usize| middle(vals.iter().map(|c| c[k]).collect()).unwrap_or(0.0);
     /// A slice: along, middle and half width across (m), its median's peak, its cameras.
     struct Slice {
         t: f64,
@@ -1053,12 +1037,7 @@ fn line_part(
             let edge = 10.min(n / 4);
             let floors: Vec<f64> = vals
                 .iter()
-                .map(|c| {
-                    let mut ring: Vec<f64> = c[..edge].iter().chain(&c[n - edge..]).map(|v| v.abs()).collect();
-                    ring.sort_by(f64::total_cmp);
-                    let sigma = ring.get(ring.len() / 2).map_or(0.0, |m| m / 0.674_49);
-                    (SMALL_PART_FLOOR * most).max(f64::from(super::mask::NOISE_SIGMAS) * sigma)
-                })
+                .map(|c| light_floor(c[..edge].iter().chain(&c[n - edge..]).copied(), most))
                 .collect();
             let reach = |i: usize| vals.iter().zip(&floors).any(|(c, f)| c[i] >= *f);
             let first = (0..=peak).rev().take_while(|&i| reach(i)).last().unwrap_or(peak);
@@ -1066,7 +1045,7 @@ fn line_part(
             if first == 0 || last == n - 1 {
                 return None;
             }
-            let mut widths: Vec<f64> = vals
+            let widths: Vec<f64> = vals
                 .iter()
                 .filter_map(|c| {
                     let (sum, most) = c[first..=last]
@@ -1078,8 +1057,7 @@ fn line_part(
             if widths.len() < 3 {
                 return None;
             }
-            widths.sort_by(f64::total_cmp);
-            let width = widths[widths.len() / 2];
+            let width = middle(widths)?;
             let scale = (width / (right - left)).clamp(0.7, 1.4);
             Some(Slice {
                 t,
@@ -1116,9 +1094,8 @@ fn line_part(
             // The plane moved by dz at the middle, tilted by `slope` along the axis and by `roll`
             // across it (the light gives its facing to a few degrees only).
             let tm = 0.5 * (lo.x + hi.x);
-            let mut sm: Vec<f64> = slices.iter().flatten().filter(|s| s.top > 0.0).map(|s| s.mid).collect();
-            sm.sort_by(f64::total_cmp);
-            let centre = to3(DVec2::new(tm, sm.get(sm.len() / 2).copied().unwrap_or(0.0)));
+            let sm: Vec<f64> = slices.iter().flatten().filter(|s| s.top > 0.0).map(|s| s.mid).collect();
+            let centre = to3(DVec2::new(tm, middle(sm).unwrap_or(0.0)));
             let axis = (a + slope * normal).normalize();
             let normal = (normal - slope * a - roll * b).normalize();
             let point = centre + dz * normal;
@@ -1136,12 +1113,7 @@ fn line_part(
             );
         }
     }
-    let mut tops: Vec<f64> = slices.iter().flatten().map(|s| s.top).filter(|t| *t > 0.0).collect();
-    if tops.is_empty() {
-        return None;
-    }
-    tops.sort_by(f64::total_cmp);
-    let typical = tops[tops.len() / 2];
+    let typical = middle(slices.iter().flatten().map(|s| s.top).filter(|t| *t > 0.0).collect())?;
     // The band goes on beyond the part while the light does: carving can break a strip narrower
     // than its cells into pieces, and each piece's band then covers the whole strip (the copies
     // are merged in `refine_flat_parts`), its gaps included.
@@ -1339,6 +1311,24 @@ struct Edge {
     t: f64,
     s: f64,
     p: DVec3,
+}
+
+/// The middle value of `v` (the upper of the two of an even count); `None` when `v` is empty.
+fn middle(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    let k = v.len() / 2;
+    Some(*v.select_nth_unstable_by(k, f64::total_cmp).1)
+}
+
+/// A camera's floor under a small part's or a line's light: [`SMALL_PART_FLOOR`] of `most` (the
+/// largest value any camera sees there), or six times the camera's noise where that is more: the
+/// median magnitude of its samples `outer` (beyond the part) over that of a half-normal
+/// distribution (0.674); 0 in a noise-free image.
+fn light_floor(outer: impl Iterator<Item = f64>, most: f64) -> f64 {
+    let sigma = middle(outer.map(f64::abs).collect()).map_or(0.0, |m| m / 0.674_49);
+    (SMALL_PART_FLOOR * most).max(f64::from(super::mask::NOISE_SIGMAS) * sigma)
 }
 
 /// The floor (a fraction of the largest value) of a small part's light in `small_parts`.
