@@ -33,6 +33,42 @@ use lumiview::nearfield::{ImageSource, LuminanceImage, Scan};
 
 type Res<T> = std::result::Result<T, Box<dyn Error>>;
 
+/// The system allocator, counting the bytes held now and at most (what each stage of `reconstruct`
+/// holds, apart from what the allocator keeps resident after it is freed).
+struct Counting;
+
+static HELD: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+static MOST: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+// SAFETY: every call is forwarded to the system allocator with the same layout.
+unsafe impl std::alloc::GlobalAlloc for Counting {
+    unsafe fn alloc(&self, l: std::alloc::Layout) -> *mut u8 {
+        use std::sync::atomic::Ordering::Relaxed;
+        // SAFETY: forwarded as given.
+        let p = unsafe { std::alloc::System.alloc(l) };
+        if !p.is_null() {
+            let now = HELD.fetch_add(l.size(), Relaxed) + l.size();
+            MOST.fetch_max(now, Relaxed);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, p: *mut u8, l: std::alloc::Layout) {
+        HELD.fetch_sub(l.size(), std::sync::atomic::Ordering::Relaxed);
+        // SAFETY: forwarded as given.
+        unsafe { std::alloc::System.dealloc(p, l) }
+    }
+}
+
+#[global_allocator]
+static ALLOC: Counting = Counting;
+
+/// Heap bytes held now and at most so far (MiB).
+fn heap_mib() -> (f64, f64) {
+    use std::sync::atomic::Ordering::Relaxed;
+    let mib = |v: usize| v as f64 / 1048576.0;
+    (mib(HELD.load(Relaxed)), mib(MOST.load(Relaxed)))
+}
+
 /// Every `k`-th camera of a scan, so a short run keeps the full layout's mix of views.
 struct Subset {
     inner: Box<dyn ImageSource>,
@@ -171,19 +207,26 @@ fn footprint(a: &Args) -> Res<serde_json::Value> {
     v["layout"] = json!(a.layout);
     v["size"] = json!([a.size.0, a.size.1]);
     v["vm_hwm_kib"] = json!(vm_hwm_kib());
+    v["heap_most_mib"] = json!(heap_mib().1);
     Ok(v)
 }
 
 fn reconstruct(a: &Args) -> Res<serde_json::Value> {
     let scan = synth(a)?;
+    let (held, _) = heap_mib();
+    eprintln!(
+        "bench_pack: reconstruct: scan made (peak resident {:.0} MiB; heap {held:.1} MiB)",
+        vm_hwm_kib() as f64 / 1024.0
+    );
     let t = Instant::now();
     let last = std::sync::Mutex::new(Instant::now());
     let progress = |stage: &str, done: usize, total: usize| {
         let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
         if done == total || done == 0 || l.elapsed().as_secs_f64() > 10.0 {
             *l = Instant::now();
+            let (held, most) = heap_mib();
             eprintln!(
-                "bench_pack: reconstruct: {stage} {done}/{total} (peak {:.0} MiB)",
+                "bench_pack: reconstruct: {stage} {done}/{total} (peak resident {:.0} MiB; heap {held:.1} MiB, at most {most:.1})",
                 vm_hwm_kib() as f64 / 1024.0
             );
         }
@@ -194,7 +237,7 @@ fn reconstruct(a: &Args) -> Res<serde_json::Value> {
     let mut v = json!({
         "mode": "reconstruct", "layout": a.layout, "size": [a.size.0, a.size.1],
         "images": scan.set.cameras.len(), "reconstruct_s": secs, "kept": rec.is_some(),
-        "warnings": warnings, "vm_hwm_kib": vm_hwm_kib(),
+        "warnings": warnings, "vm_hwm_kib": vm_hwm_kib(), "heap_most_mib": heap_mib().1,
     });
     if let Some(r) = rec {
         let r = r.report;
@@ -203,6 +246,7 @@ fn reconstruct(a: &Args) -> Res<serde_json::Value> {
             json!({"masks": r.seconds[0], "carving": r.seconds[1], "mesh": r.seconds[2], "refining": r.seconds[3]});
         v["voxel_mm"] = json!(r.voxel_m * 1e3);
         v["triangles"] = json!(r.triangles);
+        v["triangles_before_simplifying"] = json!(r.simplified.triangles_before);
         v["coverage"] = json!(r.coverage);
         v["mask_bytes"] = json!(r.mask_bytes);
     }
