@@ -11,20 +11,33 @@ pub const COARSE_PX: u32 = 8;
 /// Squares with more rows than this are answered from the coarse map.
 const EXACT_ROWS: i64 = 24;
 
+/// Coarse cells kept around the lit ones in the distance map (beyond them the distance to the lit
+/// cells' box is used; the coarse map answers squares of at least [`EXACT_ROWS`] rows, 3 cells).
+const DIST_MARGIN: u32 = 8;
+
 /// The lit pixels of one image.
 #[derive(Debug, Clone)]
 pub struct LitMask {
     width: u32,
     height: u32,
-    /// Index into `runs` of each row's first run; `height + 1` entries.
+    /// First row that may hold a lit run (the rows above hold none).
+    row0: u32,
+    /// Index into `runs` of the first run of each row from `row0` on, and one past the last
+    /// (the rows below hold none): only the lit rows are stored, so a small source's mask is small.
     row_start: Vec<u32>,
     /// Lit runs `[start, end)` (columns), row by row, left to right.
     runs: Vec<(u16, u16)>,
     /// Coarse cells across and down.
     cw: u32,
     ch: u32,
-    /// Chessboard distance (cells, saturating at 255) from each coarse cell to the nearest cell
-    /// holding a lit pixel (0: the cell holds one).
+    /// The coarse cells holding a lit pixel: `[x0, x1, y0, y1]`, inclusive (`None`: none).
+    lit_cells: Option<[u32; 4]>,
+    /// `[x0, y0, width, height]` (cells): the lit cells' box grown by [`DIST_MARGIN`] cells, clipped
+    /// to the image; `dist` covers it.
+    window: [u32; 4],
+    /// Chessboard distance (cells, saturating at 255) from each coarse cell of `window` to the
+    /// nearest cell holding a lit pixel (0: the cell holds one). Outside the window the distance to
+    /// the lit cells' box stands in (never more than the true distance, so dark stays certain).
     dist: Vec<u8>,
     /// Lit pixels.
     pub lit_pixels: u64,
@@ -81,10 +94,11 @@ impl LitMask {
         }
         let floor = floor.max(f32::MIN_POSITIVE);
         let (cw, ch) = (w.div_ceil(COARSE_PX), h.div_ceil(COARSE_PX));
-        let mut lit_cells = vec![false; (cw * ch) as usize];
+        // Every row's first run (`height + 1` entries), trimmed to the lit rows below.
         let mut row_start = Vec::with_capacity(h as usize + 1);
         let mut runs = Vec::new();
         let mut lit_pixels = 0u64;
+        let (mut x0, mut x1, mut y0, mut y1) = (u32::MAX, 0u32, u32::MAX, 0u32);
         for r in 0..h {
             row_start.push(runs.len() as u32);
             let row = &img.data[(r * w) as usize..((r + 1) * w) as usize];
@@ -97,24 +111,54 @@ impl LitMask {
                     }
                     runs.push((s as u16, c as u16));
                     lit_pixels += (c - s) as u64;
-                    let cy = r / COARSE_PX;
-                    for cx in (s as u32 / COARSE_PX)..=((c as u32 - 1) / COARSE_PX) {
-                        lit_cells[(cy * cw + cx) as usize] = true;
-                    }
+                    (x0, x1) = (x0.min(s as u32 / COARSE_PX), x1.max((c as u32 - 1) / COARSE_PX));
+                    (y0, y1) = (y0.min(r / COARSE_PX), y1.max(r / COARSE_PX));
                 } else {
                     c += 1;
                 }
             }
         }
         row_start.push(runs.len() as u32);
+        if runs.is_empty() {
+            let mut m = Self::unlit(w, h);
+            m.max_cd_m2 = max;
+            m.floor_cd_m2 = floor;
+            return Some(m);
+        }
+        // Rows before the first lit one and after the last hold no run.
+        let first = row_start.iter().position(|&k| k > 0).map_or(0, |k| k - 1);
+        let last = row_start
+            .iter()
+            .position(|&k| k as usize == runs.len())
+            .unwrap_or(h as usize);
+        let row_start: Vec<u32> = row_start[first..=last].to_vec();
+        let (wx, wy) = (x0.saturating_sub(DIST_MARGIN), y0.saturating_sub(DIST_MARGIN));
+        let window = [
+            wx,
+            wy,
+            (x1 + DIST_MARGIN).min(cw - 1) + 1 - wx,
+            (y1 + DIST_MARGIN).min(ch - 1) + 1 - wy,
+        ];
+        let mut lit_cells = vec![false; (window[2] * window[3]) as usize];
+        for (i, r) in (first as u32..).zip(row_start.windows(2)) {
+            for &(s, e) in &runs[r[0] as usize..r[1] as usize] {
+                let cy = i / COARSE_PX - window[1];
+                for cx in (u32::from(s) / COARSE_PX)..=((u32::from(e) - 1) / COARSE_PX) {
+                    lit_cells[(cy * window[2] + cx - window[0]) as usize] = true;
+                }
+            }
+        }
         Some(Self {
             width: w,
             height: h,
+            row0: first as u32,
             row_start,
             runs,
             cw,
             ch,
-            dist: chessboard(&lit_cells, cw as usize, ch as usize),
+            lit_cells: Some([x0, x1, y0, y1]),
+            window,
+            dist: chessboard(&lit_cells, window[2] as usize, window[3] as usize),
             lit_pixels,
             max_cd_m2: max,
             floor_cd_m2: floor,
@@ -128,11 +172,14 @@ impl LitMask {
         Self {
             width,
             height,
-            row_start: vec![0; height as usize + 1],
+            row0: 0,
+            row_start: vec![0],
             runs: Vec::new(),
             cw,
             ch,
-            dist: vec![255; (cw * ch) as usize],
+            lit_cells: None,
+            window: [0; 4],
+            dist: Vec::new(),
             lit_pixels: 0,
             max_cd_m2: 0.0,
             floor_cd_m2: 0.0,
@@ -146,9 +193,7 @@ impl LitMask {
 
     /// The lit pixels' bounding box `[col0, col1, row0, row1]` (pixel edges, px).
     pub fn lit_box(&self) -> Option<[f64; 4]> {
-        let rows: Vec<usize> = (0..self.height as usize)
-            .filter(|&r| self.row_start[r + 1] > self.row_start[r])
-            .collect();
+        let rows: Vec<usize> = (0..self.height as usize).filter(|&r| !self.row(r).is_empty()).collect();
         let (first, last) = (*rows.first()?, *rows.last()?);
         let (mut c0, mut c1) = (u16::MAX, 0u16);
         for &(s, e) in &self.runs {
@@ -165,7 +210,7 @@ impl LitMask {
         let mut out = Vec::new();
         let mut k = 0usize;
         for r in 0..self.height as usize {
-            for &(s, e) in &self.runs[self.row_start[r] as usize..self.row_start[r + 1] as usize] {
+            for &(s, e) in self.row(r) {
                 for c in s..e {
                     if k.is_multiple_of(step) {
                         out.push((f64::from(c) + 0.5, r as f64 + 0.5));
@@ -180,6 +225,31 @@ impl LitMask {
     /// Bytes held.
     pub fn bytes(&self) -> usize {
         self.row_start.len() * 4 + self.runs.len() * 4 + self.dist.len()
+    }
+
+    /// Row `r`'s lit runs (none outside the image).
+    fn row(&self, r: usize) -> &[(u16, u16)] {
+        match r.checked_sub(self.row0 as usize) {
+            Some(k) if k + 1 < self.row_start.len() => {
+                &self.runs[self.row_start[k] as usize..self.row_start[k + 1] as usize]
+            }
+            _ => &[],
+        }
+    }
+
+    /// Chessboard distance (coarse cells, saturating at 255) from cell (cx, cy) to the nearest
+    /// cell holding a lit pixel, or less where that cell lies outside the stored window.
+    fn cell_distance(&self, cx: u32, cy: u32) -> u8 {
+        let Some([x0, x1, y0, y1]) = self.lit_cells else {
+            return 255;
+        };
+        let [wx, wy, ww, wh] = self.window;
+        if (wx..wx + ww).contains(&cx) && (wy..wy + wh).contains(&cy) {
+            return self.dist[((cy - wy) * ww + cx - wx) as usize];
+        }
+        // The distance to the lit cells' box: none lies nearer.
+        let gap = |c: u32, lo: u32, hi: u32| lo.saturating_sub(c).max(c.saturating_sub(hi));
+        gap(cx, x0, x1).max(gap(cy, y0, y1)).min(255) as u8
     }
 
     /// Whether every pixel that the square of half-size `r` (px) about (u, v) (pixel coordinates,
@@ -203,7 +273,7 @@ impl LitMask {
         // Coarse: the cell of (u, v) and its chessboard distance d to light. Every lit pixel is then
         // more than (d − 1)·COARSE_PX px from (u, v) along x or y.
         let (cx, cy) = ((u / f64::from(COARSE_PX)) as u32, (v / f64::from(COARSE_PX)) as u32);
-        let d = self.dist[(cy.min(self.ch - 1) * self.cw + cx.min(self.cw - 1)) as usize];
+        let d = self.cell_distance(cx.min(self.cw - 1), cy.min(self.ch - 1));
         if f64::from(d.saturating_sub(1)) * f64::from(COARSE_PX) > r + 1.0 {
             return Some(true);
         }
@@ -225,7 +295,7 @@ impl LitMask {
         }
         // The pixels around the square too (a surface between pixel centres is lit only if both are).
         (r0..=r1).all(|r| {
-            let runs = &self.runs[self.row_start[r as usize] as usize..self.row_start[r as usize + 1] as usize];
+            let runs = self.row(r as usize);
             let i = runs.partition_point(|&(_, e)| i64::from(e) <= c0);
             runs.get(i)
                 .is_some_and(|&(s, e)| i64::from(s) <= c0 && i64::from(e) > c1)
@@ -235,7 +305,7 @@ impl LitMask {
     /// Whether rows `r0..=r1` hold no lit pixel in columns `c0..=c1`.
     fn rows_dark(&self, c0: i64, c1: i64, r0: i64, r1: i64) -> bool {
         for r in r0.max(0)..=r1.min(i64::from(self.height) - 1) {
-            let runs = &self.runs[self.row_start[r as usize] as usize..self.row_start[r as usize + 1] as usize];
+            let runs = self.row(r as usize);
             // First run ending after c0.
             let i = runs.partition_point(|&(_, e)| i64::from(e) <= c0);
             if let Some(&(s, _)) = runs.get(i) {
@@ -370,6 +440,55 @@ mod tests {
             img.data[(r * w + c) as usize] = 100.0;
         }
         img
+    }
+
+    #[test]
+    fn a_small_source_in_a_full_size_image_keeps_a_small_mask() {
+        // A 40 × 30 px source in a full-size capture: the mask holds its rows and the distance map
+        // around it only (it held 4 KB of row starts and 19 KB of distances for any image).
+        let mut lit = Vec::new();
+        for r in 500..530u32 {
+            for c in 600..640u32 {
+                if (c + r) % 7 != 0 {
+                    lit.push((c, r));
+                }
+            }
+        }
+        let img = image_with(1216, 1021, &lit);
+        let m = LitMask::of(&img, 1e-3).unwrap();
+        assert_eq!(m.lit_pixels, lit.len() as u64);
+        assert!(m.bytes() < 4096, "{} bytes", m.bytes());
+        assert_eq!(m.lit_box(), Some([600.0, 640.0, 500.0, 530.0]));
+        assert_eq!(m.lit_centres(usize::MAX).len(), lit.len());
+        // Squares all over the image, brute-forced: never dark where a lit pixel is; exact where
+        // the runs answer; dark far from the source, inside and outside the stored window.
+        let mut rng = 12345u64;
+        let mut next = |n: f64| {
+            rng = rng.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (rng >> 11) as f64 / (1u64 << 53) as f64 * n
+        };
+        for i in 0..3000 {
+            let r = if i % 2 == 0 { next(10.0) } else { next(200.0) };
+            let (u, v) = (r + next(1216.0 - 2.0 * r), r + next(1021.0 - 2.0 * r));
+            let truth = !lit.iter().any(|&(c, rr)| {
+                let (x, y) = (f64::from(c), f64::from(rr));
+                x < u + r && x + 1.0 > u - r && y < v + r && y + 1.0 > v - r
+            });
+            let got = m.dark(u, v, r).unwrap();
+            assert!(!got || truth, "({u}, {v}, {r}) called dark but holds a lit pixel");
+            if 2.0 * r <= EXACT_ROWS as f64 - 2.0 {
+                assert_eq!(got, truth, "({u}, {v}, {r})");
+            }
+        }
+        assert_eq!(m.dark(700.0, 515.0, 30.0), Some(true), "beside it, in the window");
+        assert_eq!(
+            m.dark(100.0, 100.0, 60.0),
+            Some(true),
+            "far from it, outside the window"
+        );
+        assert_eq!(m.dark(620.0, 515.0, 40.0), Some(false));
+        assert!(m.lit(612.5, 512.5, 0.4));
+        assert!(!m.lit(100.5, 100.5, 0.4));
     }
 
     #[test]
