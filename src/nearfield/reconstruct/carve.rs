@@ -348,24 +348,27 @@ pub fn carve(
     // Children are made a chunk of parents at a time, so memory holds the undecided cells of one
     // level (the finest level's children, 9 million for a 200 mm disc at 1.1 mm cells, are never
     // all held). Level 0's cells are the children of a coarser level of BASE_CELLS / 2 per axis.
+    // The split cells are held in lists of at most PARENTS_PER_CHUNK (a single list grown by doubling
+    // held up to three times its length while it grew), each freed once its children are made.
     let half = (BASE_CELLS / 2) as u32;
-    let mut parents: Vec<u32> = (0..half * half * half)
+    let mut parents: Vec<Vec<u32>> = vec![(0..half * half * half)
         .map(|i| pack([i % half, i / half % half, i / (half * half)]))
-        .collect();
+        .collect()];
     for level in 0..=levels {
         let size = 2.0 * half_m / (BASE_CELLS << level) as f64;
         let finest = level == levels;
         let scale = 1usize << (levels - level);
-        let groups = parents.chunks(PARENTS_PER_CHUNK).map(|chunk| {
-            chunk
-                .iter()
+        // One list of parents (at most PARENTS_PER_CHUNK) at a time, freed once its children are made.
+        let groups = parents.into_iter().map(|list| {
+            list.iter()
                 .flat_map(|&p| {
                     let [x, y, z] = unpack(p);
                     (0..8u32).map(move |k| pack([2 * x + (k & 1), 2 * y + ((k >> 1) & 1), 2 * z + (k >> 2)]))
                 })
                 .collect::<Vec<u32>>()
         });
-        let mut next = Vec::new();
+        let mut next: Vec<Vec<u32>> = Vec::new();
+        let mut split = Vec::new();
         for cells_now in groups {
             let judged: Vec<(u32, Option<bool>, u64)> = cells_now
                 .par_iter()
@@ -398,9 +401,17 @@ pub fn carve(
                         }
                     }
                     Some(false) => {}
-                    None => next.push(p),
+                    None => {
+                        split.push(p);
+                        if split.len() == PARENTS_PER_CHUNK {
+                            next.push(std::mem::take(&mut split));
+                        }
+                    }
                 }
             }
+        }
+        if !split.is_empty() {
+            next.push(split);
         }
         progress(level + 1, levels + 1);
         parents = next;
