@@ -519,62 +519,84 @@ fn snap_outline(
     if steep.len() < 3 {
         return;
     }
-    // Edges of the part's triangles: (edge, third vertex, facing sign) per triangle, sorted by edge
-    // (a stable sort: each edge's triangles stay in mesh order). Flat vectors rather than maps of
-    // vectors: the part can be the whole unsimplified mesh (10⁵ triangles), and this is the
-    // reconstruction's peak.
-    let mut edges: Vec<((u32, u32), u32, i8)> = Vec::new();
-    for t in &mesh.triangles {
-        if !t.iter().all(|&i| on.contains(&(i as usize))) {
-            continue;
+    // The part's triangles around each vertex, as compressed rows in mesh order: vertex x's are
+    // `tris[start[x]..start[x + 1]]`. 12 bytes a triangle: the part can be the whole unsimplified
+    // mesh (10⁵ triangles), and this is the reconstruction's peak (a sorted list of edges, maps of
+    // vectors and a stable sort's scratch held 14 MB for the full-size disc).
+    let n = mesh.vertices.len();
+    let on_plane = |t: &[u32; 3]| t.iter().all(|&i| on.contains(&(i as usize)));
+    let mut start = vec![0u32; n + 1];
+    for t in mesh.triangles.iter().filter(|t| on_plane(t)) {
+        for &i in t {
+            start[i as usize + 1] += 1;
         }
+    }
+    for i in 0..n {
+        start[i + 1] += start[i];
+    }
+    let mut tris = vec![0u32; start[n] as usize];
+    let mut fill = start.clone();
+    for (k, t) in mesh.triangles.iter().enumerate().filter(|(_, t)| on_plane(t)) {
+        for &i in t {
+            tris[fill[i as usize] as usize] = k as u32;
+            fill[i as usize] += 1;
+        }
+    }
+    drop(fill);
+    let tris_of = |x: u32| &tris[start[x as usize] as usize..start[x as usize + 1] as usize];
+    // The side of the plane a triangle faces (`None`: degenerate).
+    let facing = |t: &[u32; 3]| -> Option<i8> {
         let [a, b, c] = mesh.corners(t);
         let n = (b - a).cross(c - a);
-        if n.length_squared() < 1e-24 {
-            continue;
-        }
-        let sign: i8 = if n.dot(normal).is_sign_negative() { -1 } else { 1 };
-        for k in 0..3 {
-            let (p, q, r) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
-            edges.push(((p.min(q), p.max(q)), r, sign));
-        }
-    }
-    edges.sort_by_key(|e| e.0);
+        (n.length_squared() >= 1e-24).then_some(if n.dot(normal).is_sign_negative() { -1 } else { 1 })
+    };
     let mut outward: BTreeMap<u32, DVec3> = BTreeMap::new();
     let mut along: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-    for tris in edges.chunk_by(|a, b| a.0 == b.0) {
-        if tris.len() != 2 || tris[0].2 == tris[1].2 {
-            continue;
-        }
-        let (p, q) = tris[0].0;
-        along.entry(p).or_default().push(q);
-        along.entry(q).or_default().push(p);
-        let (vp, vq) = (mesh.vertices[p as usize], mesh.vertices[q as usize]);
-        let mut u = normal.cross(vq - vp).normalize_or_zero();
-        let inner = mesh.vertices[tris[0].1 as usize] - 0.5 * (vp + vq);
-        if u.dot(inner) > 0.0 {
-            u = -u;
-        }
-        for v in [p, q] {
-            *outward.entry(v).or_insert(DVec3::ZERO) += u;
-        }
-    }
-    drop(edges);
-    // Neighbours on the plane: (vertex, neighbour) pairs sorted (stably) by vertex.
-    let mut around: Vec<(u32, u32)> = Vec::new();
-    for t in &mesh.triangles {
-        if t.iter().all(|&i| on.contains(&(i as usize))) {
-            for k in 0..3 {
-                around.push((t[k], t[(k + 1) % 3]));
-                around.push((t[(k + 1) % 3], t[k]));
+    // Each edge (p, q), p < q, in that order, with its two triangles (mesh order) facing opposite
+    // ways: a fold.
+    for p in 0..n as u32 {
+        let mut qs: Vec<u32> = tris_of(p)
+            .iter()
+            .map(|&k| &mesh.triangles[k as usize])
+            .filter(|t| facing(t).is_some())
+            .flat_map(|t| t.iter().copied().filter(|&q| q > p))
+            .collect();
+        qs.sort_unstable();
+        qs.dedup();
+        for q in qs {
+            let mut both = tris_of(p)
+                .iter()
+                .map(|&k| &mesh.triangles[k as usize])
+                .filter(|t| t.contains(&q));
+            let (Some(t0), Some(t1), None) = (both.next(), both.next(), both.next()) else {
+                continue;
+            };
+            let (Some(f0), Some(f1)) = (facing(t0), facing(t1)) else {
+                continue;
+            };
+            if f0 == f1 {
+                continue;
+            }
+            along.entry(p).or_default().push(q);
+            along.entry(q).or_default().push(p);
+            let (vp, vq) = (mesh.vertices[p as usize], mesh.vertices[q as usize]);
+            let mut u = normal.cross(vq - vp).normalize_or_zero();
+            let third = t0.iter().copied().find(|&i| i != p && i != q).unwrap_or(p);
+            let inner = mesh.vertices[third as usize] - 0.5 * (vp + vq);
+            if u.dot(inner) > 0.0 {
+                u = -u;
+            }
+            for v in [p, q] {
+                *outward.entry(v).or_insert(DVec3::ZERO) += u;
             }
         }
     }
-    around.sort_by_key(|e| e.0);
+    // Neighbours on the plane: the other corners of each vertex's triangles.
+    let triangles = &mesh.triangles;
     let around_of = |x: u32| {
-        let lo = around.partition_point(|e| e.0 < x);
-        let hi = around.partition_point(|e| e.0 <= x);
-        around[lo..hi].iter().map(|e| e.1)
+        tris_of(x)
+            .iter()
+            .flat_map(move |&k| triangles[k as usize].into_iter().filter(move |&w| w != x))
     };
     // Each outline vertex's move along its outward direction (m, + outwards), and whether its edge
     // lies against darkness (else against other light beyond, a step edge).
