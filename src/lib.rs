@@ -4,6 +4,7 @@
 //! - [`photometry`]: IES / EULUMDAT far-field photometry (pure CPU).
 //! - [`nearfield`]: near-field scans (pure CPU).
 //! - [`files`]: reading files with limits, writing outputs through temporary files (pure CPU).
+//! - [`memory`]: freed memory handed back to the system between a long computation's stages.
 //! - [`scene`]: scene lighting's CPU layer: glTF scenes, luminaire placement, ray queries and the
 //!   reference path tracer (pure CPU).
 //! - [`source`]: any luminaire file: its kind and the one dispatch to its reader (pure CPU).
@@ -21,6 +22,7 @@ pub mod ffi;
 pub mod files;
 pub mod gpu;
 pub mod interop;
+pub mod memory;
 pub mod nearfield;
 pub mod photometry;
 pub mod scene;

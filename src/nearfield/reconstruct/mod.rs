@@ -513,6 +513,9 @@ fn reconstruct_with(
         .collect::<Result<Vec<_>>>()?
         .into_iter()
         .unzip();
+    // The images read are freed: their pages go back before carving (each stage's peak then stands
+    // on what is in use, not on what the allocator kept from the one before).
+    crate::memory::return_freed_memory();
     let lit_relative = match masks_kind {
         Masks::Relative { .. } => opts.lit_relative,
         Masks::AboveNoise => opts.deep_relative,
@@ -668,6 +671,7 @@ fn reconstruct_with(
     } = best;
     let cameras_used = views.len();
     drop(views);
+    crate::memory::return_freed_memory();
     // Flat parts onto the plane the images agree on, from up to REFINE_CAMERAS cameras spread over
     // the sphere (read again: the masks kept no luminance), within REFINE_PIXELS.
     let t_refine = Instant::now();
@@ -705,8 +709,10 @@ fn reconstruct_with(
                 .map(|k| (chosen[k], box_crop(refine_set, chosen[k], &bounds)))
                 .collect()
         };
+        // One image at a time: each is read whole (5 MB at full size) and only its crop kept; read in
+        // parallel, the allocator kept 24 MB of them resident beyond the crops.
         let shots: Vec<refine::Shot> = picks
-            .par_iter()
+            .iter()
             .map(|&(i, crop)| {
                 let (intrinsics, image) = match fine {
                     Some(f) => {
@@ -732,6 +738,7 @@ fn reconstruct_with(
                 })
             })
             .collect::<Result<_>>()?;
+        crate::memory::return_freed_memory();
         progress("refining", 0, 1);
         let fits = refine::refine_flat_parts(&mut mesh, occupancy.voxel_m.max(footprint), &shots);
         progress("refining", 1, 1);
@@ -747,6 +754,8 @@ fn reconstruct_with(
     } else {
         simplify::Simplified::default()
     };
+    // What the caller does next (`lumiview pack` writes the pack) starts from what is in use.
+    crate::memory::return_freed_memory();
     let report = ReconstructReport {
         cameras_read: chosen.len(),
         cameras_used,
