@@ -603,16 +603,14 @@ fn merge_twin_sheets(mesh: &mut Mesh, normals: &[DVec3], moved: &[bool], reach_m
     };
     // Triangles of moved vertices only, by the cells their boxes overlap.
     let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
-    let tri_normal: Vec<DVec3> = mesh
-        .triangles
-        .iter()
-        .map(|t| {
-            t.iter()
-                .map(|&i| normals[i as usize])
-                .sum::<DVec3>()
-                .normalize_or_zero()
-        })
-        .collect();
+    // A triangle's normal from its corners' (worked out where needed: held for every triangle it
+    // was 2.6 MB of the reconstruction's peak on the full-size disc).
+    let tri_normal = |t: &[u32; 3]| {
+        t.iter()
+            .map(|&i| normals[i as usize])
+            .sum::<DVec3>()
+            .normalize_or_zero()
+    };
     for (ti, t) in mesh.triangles.iter().enumerate() {
         if !t.iter().any(|&i| moved[i as usize]) {
             continue;
@@ -647,7 +645,7 @@ fn merge_twin_sheets(mesh: &mut Mesh, normals: &[DVec3], moved: &[bool], reach_m
                         let Some(list) = grid.get(&[x, y, z]) else { continue };
                         for &ti in list {
                             let t = &mesh.triangles[ti as usize];
-                            if t.contains(&(i as u32)) || tri_normal[ti as usize].dot(n) > -0.3 {
+                            if t.contains(&(i as u32)) || tri_normal(t).dot(n) > -0.3 {
                                 continue;
                             }
                             if let Some(d) = line_triangle(v, n, mesh.corners(t)) {

@@ -50,9 +50,10 @@
 //!
 //! Luminance consistency is used for flat parts only: a curved emitter keeps its carved surface,
 //! about a cell off, and what is hidden behind a lit surface from every camera is filled in. Pure
-//! CPU, both cores (rayon); memory is the masks (a few tens of KB per camera), one bit per finest
+//! CPU, both cores (rayon); memory is the masks (runs of the lit rows and distances around them: 3.5 KB a camera for the full-size disc), one bit per finest
 //! cell, one octree level's split cells and the refinement's cropped images (at most
-//! [`REFINE_PIXELS`], two bytes each), whatever the number of images.
+//! [`REFINE_PIXELS`], two bytes each, or [`REFINE_MIN_CAMERAS`] crops), whatever the number of
+//! images; freed memory goes back to the system between the stages ([`crate::memory`]).
 
 pub mod carve;
 pub mod hemisphere;
@@ -63,7 +64,7 @@ pub mod simplify;
 
 use std::time::Instant;
 
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use rayon::prelude::*;
 
 use crate::nearfield::error::{NearfieldError, Result};
@@ -632,7 +633,10 @@ fn reconstruct_with(
         // outside (a part that only steep cameras see lit, such as a lens's floating bottom
         // under a sparsely scanned disc, is no beam).
         let beam_thin_m = if outside_beam > 0 { 2.0 * content } else { 0.0 };
+        crate::memory::return_freed_memory();
+        progress("meshing", 0, 1);
         let attempt = Attempt::mesh(&views, occupancy, rule, thin_fraction * 2.0 * content, beam_thin_m);
+        progress("meshing", 1, 1);
         (attempt, carve_s, t.elapsed().as_secs_f64())
     };
     let (mut best, mut carve_s, mut mesh_s) = run(carve::Rule::OneSided { grazing }, opts.thin_fraction, "carving");
@@ -676,7 +680,7 @@ fn reconstruct_with(
     // the sphere (read again: the masks kept no luminance), within REFINE_PIXELS.
     let t_refine = Instant::now();
     let flat_parts = if opts.refine_flat && !mesh.triangles.is_empty() {
-        // Each image cut to where the mesh's box (grown by the refinement's reach) projects; at most
+        // Each image cut to where the mesh (grown by the refinement's reach) projects; at most
         // REFINE_PIXELS pixels held together (a full-size image is 1.24 M), at least 16 cameras.
         let reach = 4.0 * occupancy.voxel_m.max(footprint);
         let (lo, hi) = mesh.vertices.iter().fold(
@@ -692,21 +696,26 @@ fn reconstruct_with(
         let picks: Vec<(usize, [u32; 4])> = carve::spread_order(chosen.len())
             .into_iter()
             .map(|k| chosen[k])
-            .map(|i| (i, box_crop(refine_set, i, &bounds)))
+            .map(|i| (i, mesh_crop(refine_set, i, &mesh.vertices, reach, &bounds)))
             .take_while(|(_, [c0, c1, r0, r1])| {
                 held += (c1 - c0) as usize * (r1 - r0) as usize;
                 held <= REFINE_PIXELS
             })
             .take(REFINE_CAMERAS)
             .collect();
-        let picks = if picks.len() >= 16 {
+        let picks = if picks.len() >= REFINE_MIN_CAMERAS {
             picks
         } else {
             let order = carve::spread_order(chosen.len());
             order
                 .into_iter()
-                .take(16)
-                .map(|k| (chosen[k], box_crop(refine_set, chosen[k], &bounds)))
+                .take(REFINE_MIN_CAMERAS)
+                .map(|k| {
+                    (
+                        chosen[k],
+                        mesh_crop(refine_set, chosen[k], &mesh.vertices, reach, &bounds),
+                    )
+                })
                 .collect()
         };
         // One image at a time: each is read whole (5 MB at full size) and only its crop kept; read in
@@ -813,6 +822,46 @@ fn box_crop(set: &RayImageSet, i: usize, bounds: &Aabb) -> [u32; 4] {
     }
 }
 
+/// The pixels of camera `i`'s image that can show a point within `reach_m` of one of `points`
+/// (luminaire frame, m): the box of the points' projections grown by `reach_m` as seen at the
+/// nearest point (stretched as off-axis as the farthest), one pixel wider each way, and never more
+/// than [`box_crop`] of `bounds` (the points' box grown by `reach_m`), which it is when a point lies
+/// within `reach_m` of the camera's plane. Tighter than the box's crop: a disc's box seen from 45°
+/// of azimuth projects to up to twice the disc's own extent, and the refinement's images are its
+/// largest memory.
+fn mesh_crop(set: &RayImageSet, i: usize, points: &[DVec3], reach_m: f64, bounds: &Aabb) -> [u32; 4] {
+    let outer = box_crop(set, i, bounds);
+    let (cam, k) = (&set.cameras[i], set.intrinsics_of(i));
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    let (mut z_min, mut t2_max) = (f64::INFINITY, 0.0f64);
+    for p in points {
+        let d = cam.to_camera(*p - cam.position_m);
+        let Some(uv) = (d.z > reach_m).then(|| k.project(d)).flatten() else {
+            return outer;
+        };
+        (lo, hi) = (lo.min(uv), hi.max(uv));
+        z_min = z_min.min(d.z);
+        t2_max = t2_max.max((d.x * d.x + d.y * d.y) / (d.z * d.z));
+    }
+    if points.is_empty() {
+        return outer;
+    }
+    let grow = reach_m * k.focal_px.x.max(k.focal_px.y) * (1.0 + t2_max) / (z_min - reach_m) + 1.0;
+    let clip = |v: f64, lo: u32, hi: u32| (v.max(0.0) as u32).clamp(lo, hi);
+    let [c0, c1, r0, r1] = outer;
+    let tight = [
+        clip((lo.x - grow).floor(), c0, c1),
+        clip((hi.x + grow).ceil(), c0, c1),
+        clip((lo.y - grow).floor(), r0, r1),
+        clip((hi.y + grow).ceil(), r0, r1),
+    ];
+    if tight[1] > tight[0] && tight[3] > tight[2] {
+        tight
+    } else {
+        outer
+    }
+}
+
 /// `img` (taken with `k`) cut to `[c0, c1) × [r0, r1)`, with the intrinsics of the cut image.
 fn cropped(k: &Intrinsics, img: &LuminanceImage, [c0, c1, r0, r1]: [u32; 4]) -> (Intrinsics, LuminanceImage) {
     let (c1, r1) = (c1.min(img.width), r1.min(img.height));
@@ -839,10 +888,15 @@ pub fn window_intrinsics(k: &Intrinsics, [c0, c1, r0, r1]: [u32; 4]) -> Intrinsi
 
 /// Cameras read again for [`refine`], at most ...
 pub const REFINE_CAMERAS: usize = 64;
-/// ... and as many as hold at most this many pixels together (each image cut to where the content
-/// can be; 16 MiB as the refinement holds them (f16), 6.8 whole full-size 1216 × 1021 images), but
-/// at least 16.
-pub const REFINE_PIXELS: usize = 1 << 23;
+/// ... and as many as hold at most this many pixels together (each image cut to where the mesh can
+/// be seen; 8 MiB as the refinement holds them (f16), 3.4 whole full-size 1216 × 1021 images), but
+/// at least [`REFINE_MIN_CAMERAS`]. 2²³ until 2026-11-27 (session 27): the crops were then the
+/// reconstruction's largest memory, 15.6 MB of 25 cameras for the full-size disc.
+pub const REFINE_PIXELS: usize = 1 << 22;
+/// Cameras read again for [`refine`] whatever their pixels: with 16 (before session 27), strips
+/// refined from 1024 px images came out 4.8° tilted and 2.2 % too large; with 24 as with 23
+/// cameras (2.7°, 1.6 %).
+pub const REFINE_MIN_CAMERAS: usize = 24;
 
 /// One carving rule's result, meshed and checked.
 struct Attempt {
