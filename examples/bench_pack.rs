@@ -1,9 +1,9 @@
 //! Benchmark of the `.lvpack` store, run by `scripts/bench-pack` (which prints the table).
 //!
 //! ```text
-//! bench_pack footprint  [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc] --out FILE
+//! bench_pack footprint  [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc] [--noise SIGMA] --out FILE
 //! bench_pack throughput --images N [--size 1216x1021] [--luminaire disc] --dir DIR
-//! bench_pack reconstruct [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc]
+//! bench_pack reconstruct [--layout rigo:28000] [--images N] [--size 1216x1021] [--luminaire disc] [--noise SIGMA]
 //! ```
 //!
 //! `footprint` renders a synthetic scan (the synthetic goniophotometer; `--images N` takes N cameras
@@ -12,7 +12,8 @@
 //! the manifest, a second read pass and a CSR encoding pass; `reconstruct` reconstructs the proxy
 //! of the same synthetic scan as `footprint` renders it, as `lumiview pack` does for a scan given
 //! without one (`reconstruct::scan_proxy`, default options; the images it reads are rendered on
-//! demand, as `footprint`'s are). Each prints one JSON object, with the process's peak resident
+//! demand, as `footprint`'s are). `--noise SIGMA` adds Gaussian noise of SIGMA cd/m² to every pixel
+//! of `footprint`'s and `reconstruct`'s images, clipped at zero, as a dark-corrected camera's carry it. Each prints one JSON object, with the process's peak resident
 //! memory (VmHWM) at the end.
 
 use std::error::Error;
@@ -81,6 +82,38 @@ impl ImageSource for Subset {
     }
 }
 
+/// Gaussian noise of `sigma` cd/m² on every pixel (deterministic: a hash of camera and pixel),
+/// clipped at zero, as a dark-corrected camera's images carry it into a pack (which takes no
+/// negative luminance).
+struct Noisy {
+    inner: Box<dyn ImageSource>,
+    sigma: f32,
+}
+
+impl ImageSource for Noisy {
+    fn image(&self, i: usize) -> NfResult<LuminanceImage> {
+        let mut img = self.inner.image(i)?;
+        for (k, v) in img.data.iter_mut().enumerate() {
+            *v = (*v + self.sigma * normal((i as u64) << 32 | k as u64)).max(0.0);
+        }
+        Ok(img)
+    }
+}
+
+/// A standard normal deviate from a 64-bit key (SplitMix64, Box–Muller).
+fn normal(key: u64) -> f32 {
+    let mix = |mut z: u64| {
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    };
+    let a = mix(key.wrapping_add(0x9e37_79b9_7f4a_7c15));
+    let b = mix(a);
+    let u = ((a >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    let v = (b >> 11) as f64 / (1u64 << 53) as f64;
+    ((-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()) as f32
+}
+
 fn subset(scan: Scan, n: Option<usize>) -> Scan {
     let total = scan.set.cameras.len();
     let Some(n) = n.filter(|&n| n < total && n > 0) else {
@@ -104,6 +137,7 @@ struct Args {
     images: Option<usize>,
     size: (u32, u32),
     luminaire: String,
+    noise: f32,
     out: Option<PathBuf>,
     dir: Option<PathBuf>,
 }
@@ -119,6 +153,7 @@ fn parse_args() -> Res<Args> {
         images: None,
         size: (1216, 1021),
         luminaire: "disc".into(),
+        noise: 0.0,
         out: None,
         dir: None,
     };
@@ -132,6 +167,7 @@ fn parse_args() -> Res<Args> {
                 a.size = (w.parse()?, h.parse()?);
             }
             "--luminaire" => a.luminaire = v,
+            "--noise" => a.noise = v.parse()?,
             "--out" => a.out = Some(v.into()),
             "--dir" => a.dir = Some(v.into()),
             _ => return Err(format!("unknown option {k}").into()),
@@ -161,7 +197,18 @@ fn synth(a: &Args) -> Res<Scan> {
         size: a.size,
         ..SynthOptions::default()
     };
-    Ok(subset(synth_scan(&opts)?, a.images))
+    let scan = subset(synth_scan(&opts)?, a.images);
+    Ok(if a.noise > 0.0 {
+        Scan {
+            set: scan.set,
+            source: Box::new(Noisy {
+                inner: scan.source,
+                sigma: a.noise,
+            }),
+        }
+    } else {
+        scan
+    })
 }
 
 /// Peak resident set size of this process in KiB (VmHWM), 0 when unknown.
@@ -205,6 +252,7 @@ fn footprint(a: &Args) -> Res<serde_json::Value> {
     let mut v = stats_json(&stats, t.elapsed().as_secs_f64());
     v["mode"] = json!("footprint");
     v["layout"] = json!(a.layout);
+    v["noise_cd_m2"] = json!(a.noise);
     v["size"] = json!([a.size.0, a.size.1]);
     v["vm_hwm_kib"] = json!(vm_hwm_kib());
     v["heap_most_mib"] = json!(heap_mib().1);
@@ -235,7 +283,7 @@ fn reconstruct(a: &Args) -> Res<serde_json::Value> {
     let rec = lumiview::nearfield::reconstruct::scan_proxy(&scan, &a.luminaire, &progress, &mut warnings)?;
     let secs = t.elapsed().as_secs_f64();
     let mut v = json!({
-        "mode": "reconstruct", "layout": a.layout, "size": [a.size.0, a.size.1],
+        "mode": "reconstruct", "layout": a.layout, "size": [a.size.0, a.size.1], "noise_cd_m2": a.noise,
         "images": scan.set.cameras.len(), "reconstruct_s": secs, "kept": rec.is_some(),
         "warnings": warnings, "vm_hwm_kib": vm_hwm_kib(), "heap_most_mib": heap_mib().1,
     });

@@ -4,7 +4,7 @@
 //! glibc's allocator keeps what a program frees for its own reuse: after a few large blocks (a
 //! full-size capture image is 5 MB) are freed it raises its thresholds, serves them from its arenas
 //! and keeps up to twice the largest one free in each arena. Across the proxy reconstruction's
-//! stages (masks, carving, meshing, refining) that held 20–40 MB resident beyond what the stages
+//! stages (masks, carving, meshing, refining) that held 13–30 MB resident beyond what the stages
 //! allocated, which put its peak above the pack's own (docs/proxy.md). [`return_freed_memory`]
 //! returns the free pages of every arena (`malloc_trim(0)`); elsewhere it does nothing.
 

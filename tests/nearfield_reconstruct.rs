@@ -282,10 +282,10 @@ fn led_dots_under_noise_are_redrawn_with_their_area() {
 /// of 1.54 mm, captures of 256 px): each is a line, whose plane the cameras' light gives
 /// (docs/proxy.md, step 5), and each is redrawn whole as a flat band. Refined from images of 1024
 /// px (0.38 mm pixels, a strip 2.6 pixels across), as a real scan's reconstruction reads its own
-/// images, the bands come out 1 mm wide and at the strips' depth. Measured (2026-11-27, session 27,
-/// 24 refinement cameras): 5 bands, area 1.016 of the strips' (1.011 with 23 in session 26), every
-/// triangle within 2.73° of the strips' plane (the roll about a band's axis, fitted to its edges),
-/// every vertex within 0.028 mm of it (16 cameras: 4.8°, area 1.022). Before lines were found,
+/// images, the bands come out 1 mm wide and at the strips' depth. Measured (2026-11-27): 5 bands,
+/// area 1.011 of the strips', every triangle within 2.7° of the strips' plane (the roll about a
+/// band's axis, fitted to its edges), every vertex within 0.029 mm of it (with 16 refinement
+/// cameras instead of these 23, tried in session 27: 4.8°, area 1.022). Before lines were found,
 /// each strip was flattened onto a plane standing on edge (its lens' widest section): rendered with
 /// that proxy, the strips lost 92 % of their flux. At 128 px (strips a third of a pixel wide) the
 /// five lenses carve into one part (docs/proxy.md, known limits).
