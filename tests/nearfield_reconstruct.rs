@@ -284,8 +284,8 @@ fn led_dots_under_noise_are_redrawn_with_their_area() {
 /// px (0.38 mm pixels, a strip 2.6 pixels across), as a real scan's reconstruction reads its own
 /// images, the bands come out 1 mm wide and at the strips' depth. Measured (2026-11-27): 5 bands,
 /// area 1.011 of the strips', every triangle within 2.7° of the strips' plane (the roll about a
-/// band's axis, fitted to its edges), every vertex within 0.029 mm of it (with 16 refinement
-/// cameras instead of these 23, tried in session 27: 4.8°, area 1.022). Before lines were found,
+/// band's axis, fitted to its edges), every vertex within 0.029 mm of it (with a budget of 2²²
+/// pixels, 16 refinement cameras, tried in session 27: 4.8°, area 1.022). Before lines were found,
 /// each strip was flattened onto a plane standing on edge (its lens' widest section): rendered with
 /// that proxy, the strips lost 92 % of their flux. At 128 px (strips a third of a pixel wide) the
 /// five lenses carve into one part (docs/proxy.md, known limits).

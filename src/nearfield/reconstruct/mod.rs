@@ -852,10 +852,10 @@ pub const REFINE_CAMERAS: usize = 64;
 pub const REFINE_PIXELS: usize = 1 << 23;
 /// Cameras read again for [`refine`] whatever their pixels. The refinement of lines depends on
 /// which cameras it reads (2026-11-27, session 27): strips refined from 1024 px images came out
-/// 4.8° tilted with 16 cameras spread over the sphere, 2.7° with 23 or 24; at the contract's pitch
-/// rule (2,354 px) 24 cameras drew strips' orthographic intensity up to 49.8 % off against 5.9 %
-/// with 16. So the budget was left as it is: 2²² pixels with at least 24 cameras, tried for memory,
-/// changed what the refinement sees.
+/// 2.2 % too large and 4.8° tilted with 16 cameras of 2²² pixels, 1.1 % and 2.7° with the cameras
+/// 2²³ pixels hold; at the contract's pitch rule (2,354 px) 24 cameras drew strips' orthographic
+/// intensity up to 49.8 % off against 5.9 % with 16. So the budget was left as it is: 2²² pixels
+/// with at least 24 cameras, tried for memory, changed what the refinement sees.
 pub const REFINE_MIN_CAMERAS: usize = 16;
 
 /// One carving rule's result, meshed and checked.
