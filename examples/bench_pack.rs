@@ -31,6 +31,7 @@ use lumiview::nearfield::manifest::{load_scan, write_scan, ImportOptions};
 use lumiview::nearfield::pack::{write_pack, CsrImage, PackOptions, PackStats};
 use lumiview::nearfield::synth::{synth_scan, SynthOptions};
 use lumiview::nearfield::{ImageSource, LuminanceImage, Scan};
+use lumiview::scene::sampling::splitmix64;
 
 type Res<T> = std::result::Result<T, Box<dyn Error>>;
 
@@ -100,17 +101,10 @@ impl ImageSource for Noisy {
     }
 }
 
-/// A standard normal deviate from a 64-bit key (SplitMix64, Box–Muller).
+/// A standard normal deviate from a 64-bit key (SplitMix64, Box–Muller), as the tests draw it.
 fn normal(key: u64) -> f32 {
-    let mix = |mut z: u64| {
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    };
-    let a = mix(key.wrapping_add(0x9e37_79b9_7f4a_7c15));
-    let b = mix(a);
-    let u = ((a >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
-    let v = (b >> 11) as f64 / (1u64 << 53) as f64;
+    let uniform = |z: u64| (splitmix64(z) >> 11) as f64 / (1u64 << 53) as f64;
+    let (u, v) = (uniform(2 * key).max(1e-300), uniform(2 * key + 1));
     ((-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()) as f32
 }
 

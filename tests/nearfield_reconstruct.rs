@@ -396,12 +396,7 @@ fn strips_carved_into_pieces_are_one_band_each() {
 
 /// A standard normal number from `key` (splitmix64 and Box–Muller).
 fn normal(key: u64) -> f32 {
-    let mix = |mut z: u64| {
-        z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mix = |z: u64| (lumiview::scene::sampling::splitmix64(z) >> 11) as f64 / (1u64 << 53) as f64;
     let (u, v) = (mix(2 * key).max(1e-300), mix(2 * key + 1));
     ((-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()) as f32
 }
